@@ -1,0 +1,69 @@
+# grainscale entry points. Every target installs what it needs on a fresh Debian machine.
+#   make demo    run the demo case (writes VTK files, a PNG plot and a summary)
+#   make test    build, install and run the test suite
+#   make bench   side-by-side benchmark against LIGGGHTS (installs it if missing)
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' \) 2>/dev/null) CMakeLists.txt pyproject.toml
+
+.PHONY: all system-deps venv install demo test test-cpp bench bench-cpp lint format clean
+
+all: install
+
+# Debian packages: Eigen 3 and Open MPI (headers, runtime, mpirun).
+system-deps:
+	@if [ ! -f /usr/include/eigen3/Eigen/Core ] || ! command -v mpirun >/dev/null; then \
+	  echo "Installing Debian packages (libeigen3-dev libopenmpi-dev openmpi-bin)"; \
+	  $(SUDO) apt-get update && \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y libeigen3-dev libopenmpi-dev openmpi-bin; \
+	fi
+
+$(VENV)/bin/python:
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+
+venv: $(VENV)/bin/python
+
+$(VENV)/.installed: $(SOURCES) | system-deps $(VENV)/bin/python
+	$(PY) -m pip install --quiet scikit-build-core pybind11 cmake ninja
+	$(PY) -m pip install --quiet --no-build-isolation ".[test,dev]"
+	@touch $@
+
+install: system-deps $(VENV)/.installed
+
+demo: install
+	$(PY) -m grainscale.examples.pour_and_settle --output out/demo
+
+test: install
+	$(PY) -m pytest -q tests
+
+test-cpp: system-deps
+	cmake -S . -B build/cpp-tests -DGRAINSCALE_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+	cmake --build build/cpp-tests -j2
+	ctest --test-dir build/cpp-tests --output-on-failure
+
+bench: install
+	$(PY) bench/python/settle.py
+
+bench-cpp: system-deps
+	cmake -S . -B build/bench -DGRAINSCALE_BUILD_BENCH=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+	cmake --build build/bench -j2
+	./build/bench/bench_pair_loop
+	./build/bench/bench_neighbor_build
+
+lint: install
+	$(VENV)/bin/ruff check python tests bench examples
+	$(VENV)/bin/ruff format --check python tests bench examples
+	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
+
+format: install
+	$(VENV)/bin/ruff format python tests bench examples
+	$(VENV)/bin/ruff check --fix python tests bench examples
+	$(VENV)/bin/clang-format -i $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
+
+clean:
+	rm -rf build out $(VENV) *.egg-info

@@ -1,0 +1,474 @@
+"""Side-by-side 'settle' benchmark: grainscale against LIGGGHTS 3.8 on one core.
+
+The case (identical physics in both codes, see settle_case.py for the exact definition):
+N monodisperse spheres (d = 2 mm, rho = 2500 kg/m^3) start on a jittered simple-cubic lattice
+(spacing 2.2 mm, square cross-section of ceil((N/2)^(1/3)) sites, filled bottom-up) with small
+seeded random velocities, inside a closed box of six plane walls, and settle under gravity.
+Hertz-Mindlin contacts with tangential history (E = 1e7 Pa, nu = 0.3, e = 0.5, mu = 0.5, walls
+of the particle material), dt = 1e-5 s, skin 0.2 mm, 4000 steps by default.
+
+The initial state is generated once per size with numpy and fed to both codes: a LIGGGHTS data
+file (atom_style granular, Atoms + Velocities) and an .npz file for ``sim.add_particles``.
+Each code runs in its own subprocess in a temporary directory, so that its peak RSS
+(``ru_maxrss`` from ``os.wait4``) is measured alone; the two codes alternate for ``--repeats``
+rounds because the machine is noisy. Reported cost is wall-clock per particle-step of the run
+only: LIGGGHTS' "Loop time" line (one process, no mpirun) and the duration of grainscale's
+``Simulation.run`` call. The per-size table shows medians, the median of the per-round ratio
+grainscale/LIGGGHTS, peak RSS and the final kinetic energy / mean height of both codes as a
+cross-check of identical physics. Raw numbers go to bench/results/settle.json (entries of other
+sizes already in that file are kept).
+
+LIGGGHTS is installed with apt-get if missing. The Debian build targets generic x86-64 (no AVX);
+keep that in mind when comparing with a grainscale build tuned for the machine.
+
+Usage: python bench/python/settle.py [--sizes 10000 50000 200000] [--steps 4000] [--repeats 3]
+                                     [--only grainscale|liggghts]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime as dt
+import json
+import os
+import platform
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from settle_case import SettleCase, initial_state, liggghts_input, write_liggghts_data
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+WORKER = HERE / "settle_grainscale_worker.py"
+DEFAULT_OUTPUT = REPO / "bench" / "results" / "settle.json"
+CODES = ("grainscale", "liggghts")
+
+LOOP_RE = re.compile(
+    r"Loop time of\s+([0-9.eE+-]+)\s+on\s+(\d+)\s+procs\s+"
+    r"for\s+(\d+)\s+steps\s+with\s+(\d+)\s+atoms"
+)
+
+
+@dataclass
+class RunResult:
+    """One run of one code on one case."""
+
+    code: str
+    round: int
+    ns_per_particle_step: float
+    run_seconds: float
+    maxrss_kib: int
+    n_final: int
+    ke_trans_final: float
+    ke_rot_final: float
+    mean_z_final: float
+    loadavg_1min: float
+    warnings: list[str] = field(default_factory=list)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def ke_final(self) -> float:
+        return self.ke_trans_final + self.ke_rot_final
+
+
+class BenchmarkError(RuntimeError):
+    pass
+
+
+# ---------------------------------------------------------------------------------------------
+# set-up
+
+
+def ensure_liggghts() -> str:
+    """Path of the ``liggghts`` executable; installs the Debian package when it is missing."""
+    exe = shutil.which("liggghts")
+    if exe:
+        return exe
+    prefix = ["env", "DEBIAN_FRONTEND=noninteractive"]
+    if os.geteuid() != 0:
+        prefix = ["sudo", *prefix]
+    install = [*prefix, "apt-get", "install", "-y", "liggghts"]
+    print("liggghts not found, installing the Debian package:", " ".join(install), flush=True)
+    if subprocess.run(install).returncode != 0:
+        subprocess.run([*prefix, "apt-get", "update"], check=True)
+        subprocess.run(install, check=True)
+    exe = shutil.which("liggghts")
+    if not exe:
+        raise BenchmarkError("apt-get install liggghts succeeded but 'liggghts' is not on PATH")
+    return exe
+
+
+def check_grainscale() -> None:
+    probe = [sys.executable, "-c", "import grainscale, grainscale._core"]
+    proc = subprocess.run(probe, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BenchmarkError(
+            f"grainscale is not importable by {sys.executable} (run 'make install' first, or "
+            f"use --only liggghts):\n{proc.stderr.strip()}"
+        )
+
+
+def prepare_inputs(case: SettleCase, workdir: Path) -> None:
+    """Generate the initial state once and write it for both codes."""
+    pos, vel = initial_state(case)
+    write_liggghts_data(workdir / "data.settle", case, pos, vel)
+    (workdir / "in.settle").write_text(liggghts_input(case, "../data.settle"))
+    np.savez(workdir / "state.npz", position=pos, velocity=vel)
+    (workdir / "case.json").write_text(json.dumps(dataclasses.asdict(case)))
+
+
+# ---------------------------------------------------------------------------------------------
+# running one code
+
+
+def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int]:
+    """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB)."""
+    with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
+        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, int(usage.ru_maxrss)  # Linux: KiB
+
+
+def _tail(path: Path, lines: int = 25) -> str:
+    if not path.exists():
+        return ""
+    return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+
+
+def _failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
+    parts = [f"{code} failed with exit code {rc} in {rundir}"]
+    parts += [f"--- {name}:\n{_tail(rundir / name)}" for name in files if (rundir / name).exists()]
+    return BenchmarkError("\n".join(parts))
+
+
+def single_thread_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["OMP_NUM_THREADS"] = "1"
+    return env
+
+
+def run_liggghts(exe: str, case: SettleCase, workdir: Path, rnd: int) -> RunResult:
+    rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [exe, "-in", "../in.settle", "-log", "log.settle"]
+        rc, rss = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0:
+            raise _failure("liggghts", rc, rundir, "log.settle", "stdout.txt", "stderr.txt")
+        log = parse_liggghts_log((rundir / "log.settle").read_text(errors="replace"))
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    if log["procs"] != 1 or log["steps"] != case.steps:
+        raise BenchmarkError(f"unexpected LIGGGHTS loop line: {log}")
+    last = log["thermo"][-1]
+    n_final = int(last["Atoms"])
+    if n_final != case.n_particles:
+        raise BenchmarkError(f"LIGGGHTS lost atoms: {n_final} of {case.n_particles} left")
+    loop = float(log["loop_seconds"])
+    return RunResult(
+        code="liggghts",
+        round=rnd,
+        ns_per_particle_step=loop / (case.steps * case.n_particles) * 1e9,
+        run_seconds=loop,
+        maxrss_kib=rss,
+        n_final=n_final,
+        ke_trans_final=float(last["KinEng"]),
+        ke_rot_final=float(last["rke"]),
+        mean_z_final=float(last["zmean"]),
+        loadavg_1min=load,
+        warnings=log["warnings"],
+        extra={
+            "version": log["version"],
+            "memory_per_proc_mbytes": log["memory_mbytes"],
+            "thermo": log["thermo"],
+            "neighbor_builds": log["neighbor_builds"],
+            "dangerous_builds": log["dangerous_builds"],
+        },
+    )
+
+
+def parse_liggghts_log(text: str) -> dict[str, Any]:
+    """Loop time, last thermo block, warnings and a few diagnostics from a LIGGGHTS log."""
+    match = LOOP_RE.search(text)
+    if not match:
+        raise BenchmarkError("no 'Loop time' line in the LIGGGHTS log:\n" + text[-2000:])
+    lines = text.splitlines()
+    header: list[str] = []
+    rows: list[dict[str, float]] = []
+    for line in lines:
+        words = line.split()
+        if words[:1] == ["Step"]:
+            header, rows = [w.removeprefix("c_").removeprefix("v_") for w in words], []
+        elif header and len(words) == len(header) and _all_numbers(words):
+            rows.append(dict(zip(header, map(float, words), strict=True)))
+        elif line.startswith("Loop time"):
+            header = []
+    if not rows:
+        raise BenchmarkError("no thermo output in the LIGGGHTS log")
+
+    def first_number(pattern: str) -> float | None:
+        m = re.search(pattern, text)
+        return float(m.group(1)) if m else None
+
+    return {
+        "loop_seconds": float(match.group(1)),
+        "procs": int(match.group(2)),
+        "steps": int(match.group(3)),
+        "atoms": int(match.group(4)),
+        "thermo": rows,
+        "warnings": [ln.strip() for ln in lines if "WARNING" in ln or "ERROR" in ln],
+        "version": lines[0].strip() if lines else "",
+        "memory_mbytes": first_number(r"Memory usage per processor = ([0-9.eE+-]+)"),
+        "neighbor_builds": first_number(r"Neighbor list builds = (\d+)"),
+        "dangerous_builds": first_number(r"Dangerous builds = (\d+)"),
+    }
+
+
+def _all_numbers(words: list[str]) -> bool:
+    try:
+        for w in words:
+            float(w)
+    except ValueError:
+        return False
+    return True
+
+
+def run_grainscale(case: SettleCase, workdir: Path, rnd: int) -> RunResult:
+    rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [
+            sys.executable,
+            str(WORKER),
+            "--case",
+            str(workdir / "case.json"),
+            "--state",
+            str(workdir / "state.npz"),
+            "--output",
+            "result.json",
+        ]
+        rc, rss = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0 or not (rundir / "result.json").exists():
+            raise _failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
+        res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
+        stderr = (rundir / "stderr.txt").read_text(errors="replace")
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    if res["n_final"] != case.n_particles:
+        raise BenchmarkError(f"grainscale lost particles: {res['n_final']} of {case.n_particles}")
+    seconds = float(res.pop("run_seconds"))
+    return RunResult(
+        code="grainscale",
+        round=rnd,
+        ns_per_particle_step=seconds / (case.steps * case.n_particles) * 1e9,
+        run_seconds=seconds,
+        maxrss_kib=rss,
+        n_final=int(res.pop("n_final")),
+        ke_trans_final=float(res.pop("ke_trans_final")),
+        ke_rot_final=float(res.pop("ke_rot_final")),
+        mean_z_final=float(res.pop("mean_z_final")),
+        loadavg_1min=load,
+        warnings=[ln.strip() for ln in stderr.splitlines() if "warn" in ln.lower()],
+        extra=res,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# benchmark driver and report
+
+
+def bench_size(
+    case: SettleCase, codes: list[str], repeats: int, liggghts_exe: str | None, keep: bool
+) -> dict[str, Any]:
+    workdir = Path(tempfile.mkdtemp(prefix=f"grainscale_settle_{case.n_particles}_"))
+    try:
+        prepare_inputs(case, workdir)
+        runs: list[RunResult] = []
+        for rnd in range(repeats):
+            for code in codes:
+                print(f"  round {rnd + 1}/{repeats}: {code:<10s} ... ", end="", flush=True)
+                if code == "liggghts":
+                    assert liggghts_exe is not None
+                    res = run_liggghts(liggghts_exe, case, workdir, rnd)
+                else:
+                    res = run_grainscale(case, workdir, rnd)
+                runs.append(res)
+                print(
+                    f"{res.ns_per_particle_step:8.1f} ns/particle-step, "
+                    f"{res.run_seconds:7.2f} s, peak RSS {res.maxrss_kib / 1024:7.1f} MiB"
+                    + (f", {len(res.warnings)} warning line(s)" if res.warnings else ""),
+                    flush=True,
+                )
+    finally:
+        if keep:
+            print(f"  inputs kept in {workdir}")
+        else:
+            shutil.rmtree(workdir, ignore_errors=True)
+    return {
+        "timestamp": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "case": case.to_dict(),
+        "repeats": repeats,
+        "runs": [dataclasses.asdict(r) | {"ke_final": r.ke_final} for r in runs],
+        "summary": summarize(runs),
+    }
+
+
+def summarize(runs: list[RunResult]) -> dict[str, Any]:
+    summary: dict[str, Any] = {}
+    for code in CODES:
+        mine = [r for r in runs if r.code == code]
+        if not mine:
+            continue
+        ns = [r.ns_per_particle_step for r in mine]
+        summary[code] = {
+            "median_ns_per_particle_step": statistics.median(ns),
+            "min_ns_per_particle_step": min(ns),
+            "max_ns_per_particle_step": max(ns),
+            "peak_rss_mib": max(r.maxrss_kib for r in mine) / 1024.0,
+            "ke_final": statistics.median(r.ke_final for r in mine),
+            "ke_trans_final": statistics.median(r.ke_trans_final for r in mine),
+            "ke_rot_final": statistics.median(r.ke_rot_final for r in mine),
+            "mean_z_final": statistics.median(r.mean_z_final for r in mine),
+        }
+    by_round: dict[int, dict[str, RunResult]] = {}
+    for r in runs:
+        by_round.setdefault(r.round, {})[r.code] = r
+    ratios = [
+        d["grainscale"].ns_per_particle_step / d["liggghts"].ns_per_particle_step
+        for d in by_round.values()
+        if len(d) == 2
+    ]
+    if ratios:
+        gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
+        summary["ratio_grainscale_over_liggghts"] = {
+            "per_round": ratios,
+            "median": statistics.median(ratios),
+        }
+        summary["cross_check"] = {
+            "ke_final_rel_diff": gs_sum["ke_final"] / lig_sum["ke_final"] - 1.0,
+            "ke_trans_final_rel_diff": gs_sum["ke_trans_final"] / lig_sum["ke_trans_final"] - 1.0,
+            "mean_z_final_diff_m": gs_sum["mean_z_final"] - lig_sum["mean_z_final"],
+        }
+    return summary
+
+
+def print_table(entry: dict[str, Any]) -> None:
+    case, s = entry["case"], entry["summary"]
+    print(
+        f"\nN = {case['n_particles']}  (box {case['n_side']} x {case['n_side']} sites, "
+        f"{case['n_layers']} layers, {case['steps']} steps, {entry['repeats']} round(s))"
+    )
+    print(
+        f"  {'code':<11s} {'ns/p-step':>10s} {'min':>8s} {'max':>8s} {'peak RSS':>10s} "
+        f"{'KE final [J]':>13s} {'(rot)':>10s} {'mean z [mm]':>12s}"
+    )
+    for code in CODES:
+        if code not in s:
+            continue
+        c = s[code]
+        print(
+            f"  {code:<11s} {c['median_ns_per_particle_step']:10.1f} "
+            f"{c['min_ns_per_particle_step']:8.1f} {c['max_ns_per_particle_step']:8.1f} "
+            f"{c['peak_rss_mib']:7.1f} MiB {c['ke_final']:13.6e} {c['ke_rot_final']:10.3e} "
+            f"{c['mean_z_final'] * 1e3:12.5f}"
+        )
+    if "ratio_grainscale_over_liggghts" in s:
+        r, x = s["ratio_grainscale_over_liggghts"], s["cross_check"]
+        per_round = ", ".join(f"{v:.3f}" for v in r["per_round"])
+        print(f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round})")
+        print(
+            f"  cross-check: KE rel. diff {x['ke_final_rel_diff']:+.2%} "
+            f"(translational {x['ke_trans_final_rel_diff']:+.2%}), "
+            f"mean z diff {x['mean_z_final_diff_m'] * 1e6:+.2f} um"
+        )
+    warned = {w for run in entry["runs"] for w in run["warnings"]}
+    for w in sorted(warned):
+        print(f"  warning: {w}")
+
+
+def machine_info() -> dict[str, Any]:
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "logical_cpus": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": sys.version.split()[0],
+        "omp_num_threads": 1,
+    }
+
+
+def write_results(path: Path, entries: dict[str, dict[str, Any]], args: argparse.Namespace) -> None:
+    """Merge the new per-size entries into ``path`` (other sizes already there are kept)."""
+    data: dict[str, Any] = {}
+    if path.exists():
+        try:
+            data = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            data = {}
+    data["benchmark"] = "settle"
+    data["machine"] = machine_info()
+    data["last_command"] = {"sizes": args.sizes, "steps": args.steps, "repeats": args.repeats}
+    data.setdefault("sizes", {}).update(entries)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10_000, 50_000, 200_000])
+    parser.add_argument("--steps", type=int, default=4000)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", choices=CODES, default=None, help="run only one code")
+    parser.add_argument("--seed", type=int, default=SettleCase.seed)
+    parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
+    parser.add_argument("--keep", action="store_true", help="keep the generated input files")
+    args = parser.parse_args(argv)
+    if min(args.sizes) < 1 or args.steps < 1 or args.repeats < 1:
+        parser.error("--sizes, --steps and --repeats must be positive")
+
+    codes = [args.only] if args.only else list(CODES)
+    try:
+        liggghts_exe = ensure_liggghts() if "liggghts" in codes else None
+        if "grainscale" in codes:
+            check_grainscale()
+        entries: dict[str, dict[str, Any]] = {}
+        for n in args.sizes:
+            case = SettleCase(n_particles=n, steps=args.steps, seed=args.seed)
+            lx, ly, lz = (1e3 * v for v in case.box_hi)
+            print(
+                f"settle N = {n}: {case.n_side}^2 x {case.n_layers} lattice, "
+                f"box {lx:.1f} x {ly:.1f} x {lz:.1f} mm",
+                flush=True,
+            )
+            entries[str(n)] = bench_size(case, codes, args.repeats, liggghts_exe, args.keep)
+            write_results(args.output, entries, args)  # after every size: partial results survive
+    except BenchmarkError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    for entry in entries.values():
+        print_table(entry)
+    print(f"\nraw numbers: {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,118 @@
+"""grainscale side of the 'settle' benchmark; settle.py runs it in a separate process.
+
+Running it alone keeps its peak memory (ru_maxrss) separate from the driver and from LIGGGHTS.
+It reads the case parameters (JSON) and the initial positions/velocities (.npz) written by the
+driver, builds the same case as the LIGGGHTS input (see settle_case.py), times only the
+``Simulation.run`` call and writes a JSON result file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from settle_case import SettleCase
+
+
+def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
+    """Build the case with the grainscale API, run it and return timings and observables."""
+    import grainscale as gs  # imported here so that import time is outside the timed section
+
+    state = np.load(state_file)
+    position = np.ascontiguousarray(state["position"], dtype=np.float64)
+    velocity = np.ascontiguousarray(state["velocity"], dtype=np.float64)
+    rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+    t_setup = time.perf_counter()
+    mat = gs.Material(
+        density=case.density,
+        youngs_modulus=case.youngs_modulus,
+        poisson_ratio=case.poisson_ratio,
+        name="glass",
+    )
+    law = gs.contact.HertzMindlin(
+        restitution=case.restitution,
+        friction=case.friction,
+        limit_force=False,  # LIGGGHTS default: limitForce off
+        tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
+        tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
+    )
+    hi = case.box_hi
+    sim = gs.Simulation(
+        domain=gs.Box(lo=(0.0, 0.0, 0.0), hi=hi, periodic=(False, False, False)),
+        contact=law,
+        gravity=(0.0, 0.0, -case.gravity),
+        time_step=case.time_step,
+        skin=case.skin,
+    )
+    sim.add_particles(
+        position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
+    )
+    # six one-sided planes of the particle material; normals point into the box
+    walls = [
+        ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
+        ((hi[0], 0.0, 0.0), (-1.0, 0.0, 0.0)),
+        ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+        ((0.0, hi[1], 0.0), (0.0, -1.0, 0.0)),
+        ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+        ((0.0, 0.0, hi[2]), (0.0, 0.0, -1.0)),
+    ]
+    for point, normal in walls:
+        sim.add_wall(gs.geometry.Plane(point=point, normal=normal, material=mat))
+    ke_initial = float(sim.kinetic_energy())
+    setup_seconds = time.perf_counter() - t_setup
+
+    t0 = time.perf_counter()
+    sim.run(steps=case.steps, progress=False)
+    run_seconds = time.perf_counter() - t0
+
+    ke_total = float(sim.kinetic_energy())
+    with sim.particles() as p:
+        mass = np.asarray(p.mass, dtype=np.float64)
+        vel = np.asarray(p.velocity, dtype=np.float64)
+        ke_trans = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", vel, vel)))
+        mean_z = float(np.mean(p.position[:, 2]))
+        n_final = int(p.id.shape[0])
+    thermo = {k: _plain(v) for k, v in sim.thermo().items()}
+    return {
+        "version": getattr(gs, "__version__", "unknown"),
+        "run_seconds": run_seconds,
+        "setup_seconds": setup_seconds,
+        "steps": int(sim.step),
+        "n_final": n_final,
+        "ke_initial": ke_initial,
+        "ke_final": ke_total,
+        "ke_trans_final": ke_trans,
+        "ke_rot_final": ke_total - ke_trans,
+        "mean_z_final": mean_z,
+        "contacts_final": int(sim.num_contacts()),
+        "thermo": thermo,
+        "rss_before_sim_kib": rss_before_kib,
+    }
+
+
+def _plain(value: Any) -> Any:
+    """Make numpy scalars JSON-serialisable."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--case", type=Path, required=True, help="case parameters (JSON)")
+    parser.add_argument("--state", type=Path, required=True, help="initial state (.npz)")
+    parser.add_argument("--output", type=Path, required=True, help="result file (JSON)")
+    args = parser.parse_args(argv)
+    case = SettleCase(**json.loads(args.case.read_text()))
+    result = run(case, args.state)
+    args.output.write_text(json.dumps(result, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

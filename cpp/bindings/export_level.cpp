@@ -1,0 +1,191 @@
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "level/level.hpp"
+
+namespace py = pybind11;
+using namespace grainscale;
+
+namespace {
+
+using Array3 = py::array_t<Real, py::array::c_style | py::array::forcecast>;
+
+Vec3 to_vec3(const std::array<Real, 3>& a) { return Vec3(a[0], a[1], a[2]); }
+std::array<Real, 3> from_vec3(const Vec3& v) { return {v[0], v[1], v[2]}; }
+
+// Zero-copy view of the first n entries of a SharedArray. The capsule holds a reference to the
+// buffer, so the view stays memory-safe even if the store later grows into a new buffer.
+template <class T, class Elem>
+py::array view(SharedArray<T>& a, Index n, std::vector<py::ssize_t> shape) {
+  if (a.data() == nullptr) a.reserve(1);  // numpy wants a real pointer even for empty views
+  auto* keep = new std::shared_ptr<T[]>(a.buffer());
+  py::capsule owner(keep, [](void* p) { delete static_cast<std::shared_ptr<T[]>*>(p); });
+  std::vector<py::ssize_t> strides;
+  if (shape.size() == 2) strides = {static_cast<py::ssize_t>(sizeof(T)), sizeof(Elem)};
+  else strides = {static_cast<py::ssize_t>(sizeof(T))};
+  shape[0] = n;
+  return py::array(py::dtype::of<Elem>(), shape, strides,
+                   reinterpret_cast<Elem*>(a.data()), owner);
+}
+
+const Real* optional_rows(const py::object& o, Index n, const char* name, Array3& keep) {
+  if (o.is_none()) return nullptr;
+  keep = Array3::ensure(o);
+  if (!keep || keep.ndim() != 2 || keep.shape(0) != n || keep.shape(1) != 3)
+    throw py::value_error(std::string("add_particles.") + name + " must have shape (N, 3)");
+  return keep.data();
+}
+
+}  // namespace
+
+void export_level(py::module_& m) {
+  py::class_<Level>(m, "Level")
+      .def(py::init([](std::array<Real, 3> lo, std::array<Real, 3> hi,
+                       std::array<bool, 3> periodic) {
+             return Level(Domain(to_vec3(lo), to_vec3(hi), periodic));
+           }),
+           py::arg("lo"), py::arg("hi"), py::arg("periodic"))
+      .def("add_material",
+           [](Level& l, Real density, Real E, Real nu) {
+             return l.add_material({density, E, nu});
+           },
+           py::arg("density"), py::arg("youngs_modulus"), py::arg("poisson_ratio"))
+      .def("set_hertz_mindlin",
+           [](Level& l, Real e, Real mu, bool limit_force, bool tangential_damping,
+              bool incremental) {
+             HertzMindlinSettings s;
+             s.restitution = e;
+             s.friction = mu;
+             s.limit_force = limit_force;
+             s.tangential_damping = tangential_damping;
+             s.history = incremental ? TangentialHistory::Incremental : TangentialHistory::Total;
+             l.set_contact_law(HertzMindlin(s));
+           },
+           py::arg("restitution"), py::arg("friction"), py::arg("limit_force"),
+           py::arg("tangential_damping"), py::arg("incremental"))
+      .def("set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); })
+      .def("set_time_step", &Level::set_time_step, py::arg("time_step"), py::arg("force"))
+      .def("set_skin", &Level::set_skin)
+      .def("add_particles",
+           [](Level& l, const Array3& position, const py::object& velocity,
+              const py::object& angular_velocity,
+              const py::array_t<Real, py::array::c_style | py::array::forcecast>& radius,
+              const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>&
+                  material) {
+             if (position.ndim() != 2 || position.shape(1) != 3)
+               throw py::value_error("add_particles.position must have shape (N, 3)");
+             const Index n = static_cast<Index>(position.shape(0));
+             if (radius.ndim() != 1 || radius.shape(0) != n)
+               throw py::value_error("add_particles.radius must have shape (N,)");
+             if (material.ndim() != 1 || material.shape(0) != n)
+               throw py::value_error("add_particles.material must have shape (N,)");
+             Array3 kv, kw;
+             const Real* v = optional_rows(velocity, n, "velocity", kv);
+             const Real* w = optional_rows(angular_velocity, n, "angular_velocity", kw);
+             return l.add_particles(n, position.data(), v, w, radius.data(), material.data());
+           },
+           py::arg("position"), py::arg("velocity"), py::arg("angular_velocity"),
+           py::arg("radius"), py::arg("material"))
+      .def("add_plane_wall",
+           [](Level& l, std::array<Real, 3> point, std::array<Real, 3> normal,
+              std::array<Real, 3> velocity, int material) {
+             PlaneWall w;
+             w.shape = PlaneWall::Shape::Infinite;
+             w.point = to_vec3(point);
+             w.normal = to_vec3(normal);
+             w.velocity = to_vec3(velocity);
+             w.material = material;
+             return l.add_wall(w);
+           },
+           py::arg("point"), py::arg("normal"), py::arg("velocity"), py::arg("material"))
+      .def("add_rectangle_wall",
+           [](Level& l, std::array<Real, 3> corner, std::array<Real, 3> edge1,
+              std::array<Real, 3> edge2, std::array<Real, 3> velocity, int material) {
+             PlaneWall w;
+             w.shape = PlaneWall::Shape::Rectangle;
+             w.point = to_vec3(corner);
+             w.edge1 = to_vec3(edge1);
+             w.edge2 = to_vec3(edge2);
+             w.velocity = to_vec3(velocity);
+             w.material = material;
+             return l.add_wall(w);
+           },
+           py::arg("corner"), py::arg("edge1"), py::arg("edge2"), py::arg("velocity"),
+           py::arg("material"))
+      .def("num_walls", [](Level& l) { return l.walls().size(); })
+      .def("wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); })
+      .def("wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); })
+      .def("wall_point", [](Level& l, int i) { return from_vec3(l.walls().at(i).point); })
+      .def("run", &Level::run, py::arg("steps"), py::call_guard<py::gil_scoped_release>())
+      .def("mark_positions_changed", &Level::mark_positions_changed)
+      .def("mark_velocities_changed", &Level::mark_velocities_changed)
+      .def_property_readonly("step", &Level::step)
+      .def_property_readonly("time", &Level::time)
+      .def_property_readonly("time_step", &Level::time_step)
+      .def_property_readonly("skin", &Level::skin)
+      .def_property_readonly("num_owned", [](Level& l) { return l.particles().n_owned(); })
+      .def_property_readonly("num_ghosts", [](Level& l) { return l.particles().n_ghost(); })
+      .def_property_readonly("lost_particles", &Level::lost_particles)
+      .def_property_readonly("rebuilds", &Level::rebuilds)
+      .def("kinetic_energy", &Level::kinetic_energy)
+      .def("smallest_rayleigh_time", &Level::smallest_rayleigh_time)
+      .def("last_contact_count", [](Level& l) { return l.last_stats().contacts; })
+      .def("last_max_overlap_ratio", [](Level& l) { return l.last_stats().max_overlap_ratio; })
+      .def("contacts",
+           [](Level& l) {
+             const auto& rec = l.last_stats().records;
+             const py::ssize_t n = static_cast<py::ssize_t>(rec.size());
+             py::array_t<GlobalId> id_i(n), id_j(n);
+             py::array_t<Real> overlap(n);
+             py::array_t<Real> normal({n, py::ssize_t(3)}), force({n, py::ssize_t(3)});
+             auto a = id_i.mutable_unchecked<1>();
+             auto b = id_j.mutable_unchecked<1>();
+             auto o = overlap.mutable_unchecked<1>();
+             auto nn = normal.mutable_unchecked<2>();
+             auto ff = force.mutable_unchecked<2>();
+             for (py::ssize_t k = 0; k < n; ++k) {
+               a(k) = rec[k].id_i;
+               b(k) = rec[k].id_j;
+               o(k) = rec[k].overlap;
+               for (int c = 0; c < 3; ++c) {
+                 nn(k, c) = rec[k].normal[c];
+                 ff(k, c) = rec[k].force[c];
+               }
+             }
+             py::dict d;
+             d["id_i"] = id_i;
+             d["id_j"] = id_j;
+             d["overlap"] = overlap;
+             d["normal"] = normal;
+             d["force"] = force;
+             return d;
+           })
+      .def("neighbor_pairs",
+           [](Level& l) {
+             const auto pairs = l.neighbor_pairs();
+             py::array_t<GlobalId> out({static_cast<py::ssize_t>(pairs.size()), py::ssize_t(2)});
+             auto o = out.mutable_unchecked<2>();
+             for (std::size_t k = 0; k < pairs.size(); ++k) {
+               o(k, 0) = pairs[k][0];
+               o(k, 1) = pairs[k][1];
+             }
+             return out;
+           })
+      .def("view",
+           [](Level& l, const std::string& name) -> py::array {
+             ParticleStore& ps = l.particles();
+             const Index n = ps.n_owned();
+             if (name == "position") return view<Vec3, Real>(ps.position, n, {0, 3});
+             if (name == "velocity") return view<Vec3, Real>(ps.velocity, n, {0, 3});
+             if (name == "angular_velocity")
+               return view<Vec3, Real>(ps.angular_velocity, n, {0, 3});
+             if (name == "force") return view<Vec3, Real>(ps.force, n, {0, 3});
+             if (name == "torque") return view<Vec3, Real>(ps.torque, n, {0, 3});
+             if (name == "radius") return view<Real, Real>(ps.radius, n, {0});
+             if (name == "mass") return view<Real, Real>(ps.mass, n, {0});
+             if (name == "id") return view<GlobalId, GlobalId>(ps.id, n, {0});
+             if (name == "material") return view<std::int32_t, std::int32_t>(ps.material, n, {0});
+             throw py::value_error("unknown particle array '" + name + "'");
+           });
+}

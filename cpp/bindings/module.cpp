@@ -1,0 +1,14 @@
+// grainscale._core: the only translation units that include pybind11. C++ exceptions map to
+// Python: InvalidArgument (std::invalid_argument) -> ValueError, others -> RuntimeError.
+#include <pybind11/pybind11.h>
+
+namespace py = pybind11;
+
+void export_level(py::module_& m);
+void export_helpers(py::module_& m);
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "grainscale C++ core (private; use the grainscale package)";
+  export_level(m);
+  export_helpers(m);
+}

@@ -1,0 +1,32 @@
+// Per-step contact statistics and an optional record of every touching contact (diagnostics,
+// stress virial). Filled only on steps that ask for them, so the hot loop pays nothing else.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace grainscale {
+
+struct ContactRecord {
+  GlobalId id_i;
+  GlobalId id_j;  // -1 - wall index for wall contacts
+  Real overlap;
+  Vec3 normal;
+  Vec3 force;  // on i
+};
+
+struct ContactStats {
+  std::int64_t contacts = 0;
+  Real max_overlap_ratio = 0;  // overlap / smaller radius of the pair
+  std::vector<ContactRecord> records;
+
+  void clear() {
+    contacts = 0;
+    max_overlap_ratio = 0;
+    records.clear();
+  }
+};
+
+}  // namespace grainscale

@@ -1,0 +1,80 @@
+// The particle-particle force loop, a template over the contact law (one implementation per law,
+// inlined; no virtual calls). Pairs are stored once; forces on ghosts are folded back by the
+// GhostExchange. Torque arm: contact radius r - overlap/2 (as LIGGGHTS).
+#pragma once
+
+#include <algorithm>
+#include <array>
+
+#include "contact/contact_stats.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "state/particle_store.hpp"
+
+namespace grainscale {
+
+// kUpdate = false evaluates forces on a scratch copy of the history (set-up evaluations must
+// not advance the tangential springs). kStats fills `stats`.
+template <class Law, bool kUpdate, bool kStats>
+void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list, Real dt,
+                            ContactStats& stats) {
+  constexpr int S = Law::kHistorySize;
+  const Index n = ps.n_owned();
+  const Vec3* x = ps.position.data();
+  const Vec3* v = ps.velocity.data();
+  const Vec3* w = ps.angular_velocity.data();
+  const Real* r = ps.radius.data();
+  const Real* im = ps.inv_mass.data();
+  const std::int32_t* mat = ps.material.data();
+  Vec3* f = ps.force.data();
+  Vec3* t = ps.torque.data();
+  const Index* partner = list.partner.data();
+  Real* hist = list.history.data();
+  for (Index i = 0; i < n; ++i) {
+    const Index b = list.first[i], e = list.first[i + 1];
+    if (b == e) continue;
+    const Vec3 xi = x[i], vi = v[i], wi = w[i];
+    const Real ri = r[i], imi = im[i];
+    const int mi = mat[i];
+    Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+    for (Index k = b; k < e; ++k) {
+      const Index j = partner[k];
+      Real* h = hist + static_cast<std::size_t>(k) * S;
+      const Vec3 d = xi - x[j];
+      const Real rj = r[j];
+      const Real rsum = ri + rj;
+      const Real d2 = d.squaredNorm();
+      if (d2 >= rsum * rsum) {
+        if constexpr (kUpdate) std::fill(h, h + S, Real(0));
+        continue;
+      }
+      const Real dist = std::sqrt(d2);
+      const Real overlap = rsum - dist;
+      const Vec3 nrm = d / dist;
+      const Real ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
+      const Vec3 vrel = vi - v[j] - (ai * wi + aj * w[j]).cross(nrm);
+      const ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
+      Vec3 F;
+      if constexpr (kUpdate) {
+        F = law.force(law.pair(mi, mat[j]), c, h);
+      } else {
+        std::array<Real, S> scratch;
+        std::copy(h, h + S, scratch.begin());
+        F = law.force(law.pair(mi, mat[j]), c, scratch.data());
+      }
+      const Vec3 nxf = nrm.cross(F);
+      fi += F;
+      ti -= ai * nxf;
+      f[j] -= F;
+      t[j] -= aj * nxf;
+      if constexpr (kStats) {
+        ++stats.contacts;
+        stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / std::min(ri, rj));
+        stats.records.push_back({ps.id[i], ps.id[j], overlap, nrm, F});
+      }
+    }
+    f[i] += fi;
+    t[i] += ti;
+  }
+}
+
+}  // namespace grainscale

@@ -1,0 +1,42 @@
+#include "integrate/velocity_verlet.hpp"
+
+#include <algorithm>
+
+namespace grainscale {
+
+Real kick_drift(ParticleStore& ps, Real dt, const std::vector<Vec3>& reference) {
+  const Real half = 0.5 * dt;
+  const Index n = ps.n_owned();
+  Vec3* x = ps.position.data();
+  Vec3* v = ps.velocity.data();
+  Vec3* w = ps.angular_velocity.data();
+  const Vec3* f = ps.force.data();
+  const Vec3* t = ps.torque.data();
+  const Real* im = ps.inv_mass.data();
+  const Real* ii = ps.inv_inertia.data();
+  Real max_d2 = 0;
+  for (Index i = 0; i < n; ++i) {
+    v[i] += (half * im[i]) * f[i];
+    w[i] += (half * ii[i]) * t[i];
+    x[i] += dt * v[i];
+    max_d2 = std::max(max_d2, (x[i] - reference[i]).squaredNorm());
+  }
+  return max_d2;
+}
+
+void kick(ParticleStore& ps, Real dt) {
+  const Real half = 0.5 * dt;
+  const Index n = ps.n_owned();
+  Vec3* v = ps.velocity.data();
+  Vec3* w = ps.angular_velocity.data();
+  const Vec3* f = ps.force.data();
+  const Vec3* t = ps.torque.data();
+  const Real* im = ps.inv_mass.data();
+  const Real* ii = ps.inv_inertia.data();
+  for (Index i = 0; i < n; ++i) {
+    v[i] += (half * im[i]) * f[i];
+    w[i] += (half * ii[i]) * t[i];
+  }
+}
+
+}  // namespace grainscale

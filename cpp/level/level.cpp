@@ -1,0 +1,314 @@
+#include "level/level.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "contact/pair_loop.hpp"
+#include "contact/wall_loop.hpp"
+#include "core/errors.hpp"
+#include "integrate/time_step.hpp"
+#include "integrate/velocity_verlet.hpp"
+
+namespace grainscale {
+
+Level::Level(const Domain& domain) : domain_(domain), law_(HertzMindlin(HertzMindlinSettings{})) {}
+
+int Level::add_material(const MaterialProperties& props) {
+  const int index = materials_.add(props);
+  law_prepared_ = false;
+  return index;
+}
+
+void Level::set_contact_law(const ContactLaw& law) {
+  if (lists_valid_) save_histories();
+  law_ = law;
+  law_prepared_ = false;
+  lists_valid_ = false;
+  forces_valid_ = false;
+  // A different law has a different history layout: contacts restart from zero.
+  pair_carry_ = HistoryCarry();
+  wall_carry_ = HistoryCarry();
+}
+
+void Level::set_gravity(const Vec3& g) {
+  if (!g.allFinite()) throw_invalid("Simulation.gravity", "finite (m/s^2)", g.transpose());
+  gravity_ = g;
+  forces_valid_ = false;
+}
+
+void Level::set_time_step(Real dt, bool force) {
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw_invalid("Simulation.time_step", "positive and finite (s)", dt);
+  time_at_dt_change_ = time_;
+  step_at_dt_change_ = step_;
+  dt_ = dt;
+  force_dt_ = force;
+}
+
+void Level::set_skin(Real skin) {
+  if (!(skin > 0) || !std::isfinite(skin))
+    throw_invalid("Simulation.skin", "positive and finite (m)", skin);
+  if (lists_valid_) save_histories();
+  skin_ = skin;
+  lists_valid_ = false;
+}
+
+void Level::mark_positions_changed() {
+  if (lists_valid_) save_histories();
+  lists_valid_ = false;
+  forces_valid_ = false;
+}
+
+GlobalId Level::add_particles(Index n, const Real* position, const Real* velocity,
+                              const Real* angular_velocity, const Real* radius,
+                              const std::int32_t* material) {
+  if (n < 0) throw_invalid("add_particles.count", "non-negative", n);
+  for (Index k = 0; k < n; ++k) {
+    const Vec3 x(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
+    if (!x.allFinite()) throw_invalid("add_particles.position", "finite (m)", x.transpose());
+    for (int a = 0; a < 3; ++a)
+      if (!domain_.periodic[a] && !domain_.inside(x, a)) {
+        std::ostringstream range;
+        range << "inside the domain [" << domain_.lo[a] << ", " << domain_.hi[a] << "] on axis "
+              << "xyz"[a] << " (particle " << k << ")";
+        throw_invalid("add_particles.position", range.str(), x[a]);
+      }
+    if (!(radius[k] > 0) || !std::isfinite(radius[k]))
+      throw_invalid("add_particles.radius", "positive and finite (m)", radius[k]);
+    if (material[k] < 0 || material[k] >= materials_.n_materials())
+      throw_invalid("add_particles.material", "a material index known to the simulation",
+                    material[k]);
+    if (velocity && !Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]).allFinite())
+      throw_invalid("add_particles.velocity", "finite (m/s)", k);
+    if (angular_velocity && !Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
+                                  angular_velocity[3 * k + 2])
+                                 .allFinite())
+      throw_invalid("add_particles.angular_velocity", "finite (rad/s)", k);
+  }
+  if (lists_valid_) save_histories();
+  lists_valid_ = false;
+  forces_valid_ = false;
+  ps_.clear_ghosts();
+  const GlobalId first = next_id_;
+  for (Index k = 0; k < n; ++k) {
+    const Real r = radius[k];
+    const Real m = materials_[material[k]].density * (4.0 / 3.0) * M_PI * r * r * r;
+    const Vec3 x(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
+    const Vec3 v = velocity ? Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2])
+                            : Vec3::Zero();
+    const Vec3 w = angular_velocity ? Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
+                                           angular_velocity[3 * k + 2])
+                                    : Vec3::Zero();
+    ps_.add_owned(next_id_++, x, v, w, r, m, 0.4 * m * r * r, material[k]);
+    origin_.push_back(-1);
+  }
+  return first;
+}
+
+int Level::add_wall(const PlaneWall& wall) {
+  PlaneWall w = wall;
+  if (!w.point.allFinite()) throw_invalid("Wall.point", "finite (m)", w.point.transpose());
+  if (!w.velocity.allFinite())
+    throw_invalid("Wall.velocity", "finite (m/s)", w.velocity.transpose());
+  if (w.shape == PlaneWall::Shape::Infinite) {
+    const Real len = w.normal.norm();
+    if (!(len > 0) || !std::isfinite(len))
+      throw_invalid("Plane.normal", "a non-zero finite vector", w.normal.transpose());
+    w.normal /= len;
+  } else {
+    const Vec3 nrm = w.edge1.cross(w.edge2);
+    if (!(nrm.norm() > 0) || !nrm.allFinite())
+      throw_invalid("Rectangle.edge2", "finite and not parallel to edge1", w.edge2.transpose());
+    w.normal = nrm.normalized();
+  }
+  if (w.material >= materials_.n_materials())
+    throw_invalid("Wall.material", "a material known to the simulation or None (rigid)",
+                  w.material);
+  if (lists_valid_) save_histories();
+  walls_.push_back(w);
+  lists_valid_ = false;
+  forces_valid_ = false;
+  return static_cast<int>(walls_.size()) - 1;
+}
+
+Real Level::kinetic_energy() const {
+  Real e = 0;
+  for (Index i = 0; i < ps_.n_owned(); ++i) {
+    const Real m = ps_.mass[i];
+    e += 0.5 * m * ps_.velocity[i].squaredNorm() +
+         0.5 / ps_.inv_inertia[i] * ps_.angular_velocity[i].squaredNorm();
+  }
+  return comm_.sum(e);
+}
+
+Real Level::smallest_rayleigh_time() const {
+  Real t = INFINITY;
+  for (Index i = 0; i < ps_.n_owned(); ++i) {
+    const MaterialProperties& m = materials_[ps_.material[i]];
+    t = std::min(t, rayleigh_time(ps_.radius[i], m.density, m.youngs_modulus, m.poisson_ratio));
+  }
+  return -comm_.max(-t);
+}
+
+std::vector<std::array<GlobalId, 2>> Level::neighbor_pairs() const {
+  std::vector<std::array<GlobalId, 2>> out;
+  if (!lists_valid_) return out;
+  for (Index i = 0; i < ps_.n_owned(); ++i)
+    for (Index k = pairs_.first[i]; k < pairs_.first[i + 1]; ++k)
+      out.push_back({ps_.id[i], ps_.id[pairs_.partner[k]]});
+  return out;
+}
+
+void Level::prepare() {
+  if (!law_prepared_) {
+    std::visit([&](auto& law) { law.prepare(materials_); }, law_);
+    for (PlaneWall& w : walls_)
+      w.law_material = w.material < 0 ? materials_.rigid_index() : w.material;
+    const int stride = history_size(law_);
+    pairs_.history_stride = stride;
+    wall_contacts_.history_stride = stride;
+    law_prepared_ = true;
+  }
+  if (!(dt_ > 0)) throw_invalid("Simulation.time_step", "set to a positive value (s)", dt_);
+  if (!(skin_ > 0)) throw_invalid("Simulation.skin", "set to a positive value (m)", skin_);
+  if (!force_dt_ && ps_.n_owned() > 0) {
+    const Real t_r = smallest_rayleigh_time();
+    if (dt_ > kMaxRayleighFraction * t_r) {
+      std::ostringstream c;
+      c.precision(6);
+      c << "at most 0.3 x the smallest Rayleigh time (" << kMaxRayleighFraction * t_r
+        << " s); pass force_time_step=True to override";
+      throw_invalid("Simulation.time_step", c.str(), dt_);
+    }
+  }
+  validate_periodic_lengths();
+}
+
+void Level::validate_periodic_lengths() const {
+  Real r_max = 0;
+  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
+  const Real cutoff = 2 * r_max + skin_;
+  for (int a = 0; a < 3; ++a)
+    if (domain_.periodic[a] && domain_.length()[a] < 2 * cutoff) {
+      std::ostringstream c;
+      c << "at least 2 x (largest diameter + skin) = " << 2 * cutoff
+        << " m along periodic axis " << "xyz"[a];
+      throw_invalid("Box.hi - Box.lo", c.str(), domain_.length()[a]);
+    }
+}
+
+void Level::save_histories() {
+  // Key every entry by its partner (global id / wall index) while the indices are valid.
+  std::vector<GlobalId> keys(pairs_.size());
+  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
+  pair_carry_.save(pairs_, keys);
+  keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
+  wall_carry_.save(wall_contacts_, keys);
+  origin_.resize(ps_.n_owned());
+  for (Index i = 0; i < ps_.n_owned(); ++i) origin_[i] = i;
+  pairs_.partner.clear();
+  wall_contacts_.partner.clear();
+}
+
+void Level::rebuild() {
+  if (lists_valid_) save_histories();
+  ps_.clear_ghosts();
+  wrap_periodic(ps_, domain_);
+
+  Real r_max = 0;
+  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
+  const Real cutoff = 2 * r_max + skin_;
+
+  // Spatial sort (owned particles in cell order, for cache locality in the force loop); particles
+  // that left the box along a non-periodic axis are dropped here and counted as lost.
+  grid_.build(ps_.position.data(), ps_.n_owned(), cutoff, 2 * ps_.n_owned() + 64);
+  std::vector<Index> order;
+  order.reserve(ps_.n_owned());
+  for (Index i : grid_.particles) {
+    bool inside = true;
+    for (int a = 0; a < 3; ++a)
+      inside = inside && (domain_.periodic[a] || domain_.inside(ps_.position[i], a));
+    if (inside) order.push_back(i);
+  }
+  lost_ += ps_.n_owned() - static_cast<Index>(order.size());
+  ps_.select_owned(order);
+  std::vector<Index> new_origin(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) new_origin[k] = origin_[order[k]];
+  origin_.swap(new_origin);
+
+  ghosts_.build(ps_, domain_, cutoff);
+  grid_.build(ps_.position.data(), ps_.n_local(), cutoff, 2 * ps_.n_local() + 64);
+  build_pair_list(ps_, grid_, skin_, pairs_);
+  build_wall_list(ps_, walls_, skin_, wall_contacts_);
+
+  std::vector<GlobalId> keys(pairs_.size());
+  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
+  pair_carry_.restore(origin_, keys, pairs_);
+  keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
+  wall_carry_.restore(origin_, keys, wall_contacts_);
+  pair_carry_ = HistoryCarry();
+  wall_carry_ = HistoryCarry();
+
+  x_at_build_.assign(ps_.position.data(), ps_.position.data() + ps_.n_owned());
+  wall_point_at_build_.clear();
+  for (const PlaneWall& w : walls_) wall_point_at_build_.push_back(w.point);
+  lists_valid_ = true;
+  ++rebuilds_;
+}
+
+template <class Law, bool kUpdate, bool kStats>
+void Level::compute_forces(const Law& law) {
+  const Index n = ps_.n_owned();
+  for (Index i = 0; i < n; ++i) {
+    ps_.force[i] = ps_.mass[i] * gravity_;
+    ps_.torque[i].setZero();
+  }
+  for (Index g = n; g < ps_.n_local(); ++g) {
+    ps_.force[g].setZero();
+    ps_.torque[g].setZero();
+  }
+  for (PlaneWall& w : walls_) {
+    w.force.setZero();
+    w.torque.setZero();
+  }
+  if constexpr (kStats) stats_.clear();
+  accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
+  ghosts_.reverse(ps_);
+  accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, wall_contacts_, dt_, stats_);
+}
+
+template <class Law>
+void Level::run_with(const Law& law, std::int64_t steps) {
+  if (!lists_valid_) rebuild();
+  if (!forces_valid_) compute_forces<Law, false, true>(law);
+  forces_valid_ = true;
+  const Real half_skin = 0.5 * skin_;
+  for (std::int64_t s = 0; s < steps; ++s) {
+    const Real max_d2 = kick_drift(ps_, dt_, x_at_build_);
+    Real wall_shift = 0;
+    for (std::size_t k = 0; k < walls_.size(); ++k) {
+      walls_[k].advance(dt_);
+      wall_shift = std::max(wall_shift, (walls_[k].point - wall_point_at_build_[k]).norm());
+    }
+    ++step_;
+    time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;
+    if (std::sqrt(comm_.max(max_d2)) + wall_shift > half_skin)
+      rebuild();
+    else
+      ghosts_.forward(ps_);
+    if (s + 1 == steps)
+      compute_forces<Law, true, true>(law);
+    else
+      compute_forces<Law, true, false>(law);
+    kick(ps_, dt_);
+  }
+}
+
+void Level::run(std::int64_t steps) {
+  if (steps < 0) throw_invalid("Simulation.run.steps", "non-negative", steps);
+  prepare();
+  std::visit([&](const auto& law) { run_with(law, steps); }, law_);
+}
+
+}  // namespace grainscale

@@ -1,0 +1,110 @@
+// Level: one complete DEM system — particles, neighbour lists with contact history, contact
+// law, walls, ghost exchange and time step. A simulation is one level; an MLCG hierarchy (later)
+// holds several. Python decides what runs and when; run(steps) executes whole steps in C++.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "contact/contact_law.hpp"
+#include "contact/contact_stats.hpp"
+#include "geometry/plane_wall.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "parallel/communicator.hpp"
+#include "parallel/ghost_exchange.hpp"
+#include "state/contact_history.hpp"
+#include "state/domain.hpp"
+#include "state/material_table.hpp"
+#include "state/particle_store.hpp"
+
+namespace grainscale {
+
+class Level {
+ public:
+  explicit Level(const Domain& domain);
+
+  // --- configuration (validated; errors name the Python-visible parameter) ---
+  int add_material(const MaterialProperties& props);
+  const MaterialTable& materials() const { return materials_; }
+  void set_contact_law(const ContactLaw& law);
+  const ContactLaw& contact_law() const { return law_; }
+  void set_gravity(const Vec3& g);
+  const Vec3& gravity() const { return gravity_; }
+  void set_time_step(Real dt, bool force);
+  Real time_step() const { return dt_; }
+  void set_skin(Real skin);
+  Real skin() const { return skin_; }
+  const Domain& domain() const { return domain_; }
+
+  // Adds n particles (arrays of 3n / n values; velocity and angular velocity may be null).
+  // Returns the global id of the first one; the others follow consecutively.
+  GlobalId add_particles(Index n, const Real* position, const Real* velocity,
+                         const Real* angular_velocity, const Real* radius,
+                         const std::int32_t* material);
+  int add_wall(const PlaneWall& wall);
+  std::vector<PlaneWall>& walls() { return walls_; }
+
+  // --- running ---
+  void run(std::int64_t steps);
+  // Tells the level that Python changed positions (needs a rebuild) or velocities (forces
+  // are recomputed, without advancing contact histories, before the next step).
+  void mark_positions_changed();
+  void mark_velocities_changed() { forces_valid_ = false; }
+
+  // --- state and diagnostics ---
+  ParticleStore& particles() { return ps_; }
+  std::int64_t step() const { return step_; }
+  Real time() const { return time_; }
+  std::int64_t lost_particles() const { return lost_; }
+  std::int64_t rebuilds() const { return rebuilds_; }
+  const ContactStats& last_stats() const { return stats_; }
+  Real kinetic_energy() const;
+  Real smallest_rayleigh_time() const;
+  // Pairs (global ids) of the current particle list, each unordered pair once.
+  std::vector<std::array<GlobalId, 2>> neighbor_pairs() const;
+
+ private:
+  template <class Law>
+  void run_with(const Law& law, std::int64_t steps);
+  template <class Law, bool kUpdate, bool kStats>
+  void compute_forces(const Law& law);
+  void prepare();
+  void validate_periodic_lengths() const;
+  void save_histories();
+  void rebuild();
+
+  Domain domain_;
+  MaterialTable materials_;
+  ContactLaw law_;
+  Vec3 gravity_ = Vec3::Zero();
+  Real dt_ = 0;
+  bool force_dt_ = false;
+  Real skin_ = 0;
+
+  ParticleStore ps_;
+  std::vector<PlaneWall> walls_;
+  std::vector<Vec3> wall_point_at_build_;
+  ContactList pairs_, wall_contacts_;
+  HistoryCarry pair_carry_, wall_carry_;
+  std::vector<Index> origin_;  // per owned particle: index when histories were saved, or -1
+  CellGrid grid_;
+  GhostExchange ghosts_;
+  Communicator comm_;
+  std::vector<Vec3> x_at_build_;
+  ContactStats stats_;
+
+  GlobalId next_id_ = 0;
+  std::int64_t step_ = 0;
+  Real time_ = 0;
+  Real time_at_dt_change_ = 0;
+  std::int64_t step_at_dt_change_ = 0;
+  std::int64_t lost_ = 0;
+  std::int64_t rebuilds_ = 0;
+  bool lists_valid_ = false;
+  bool forces_valid_ = false;
+  bool law_prepared_ = false;
+};
+
+}  // namespace grainscale

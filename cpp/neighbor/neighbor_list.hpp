@@ -1,0 +1,36 @@
+// Verlet neighbour lists with per-entry contact history.
+//
+// PairList: a half list in CSR form over owned particles. A pair is stored once, at the
+// particle with the smaller global id (owned or ghost partner alike), so a pair's orientation
+// and owner never depend on the local ordering: histories survive sorting, rebuilds and, under
+// MPI, migration. The list holds pairs with |x_i - x_j| < r_i + r_j + skin at build time and
+// stays valid until some particle has moved more than skin/2 (plus wall motion for walls).
+// WallList: per owned particle, the walls within r_i + skin.
+#pragma once
+
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/plane_wall.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "state/particle_store.hpp"
+
+namespace grainscale {
+
+struct ContactList {
+  std::vector<Index> first;    // n_owned + 1
+  std::vector<Index> partner;  // local particle index, or wall index
+  std::vector<Real> history;   // history_stride values per entry
+  int history_stride = 0;
+
+  std::size_t size() const { return partner.size(); }
+};
+
+// Builds the particle half list from a grid binned over all local (owned + ghost) particles.
+void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list);
+
+// Builds the particle-wall list.
+void build_wall_list(const ParticleStore& ps, const std::vector<PlaneWall>& walls, Real skin,
+                     ContactList& list);
+
+}  // namespace grainscale

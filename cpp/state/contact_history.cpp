@@ -1,0 +1,46 @@
+#include "state/contact_history.hpp"
+
+#include <algorithm>
+
+namespace grainscale {
+
+void HistoryCarry::save(const ContactList& list, const std::vector<GlobalId>& partner_key) {
+  stride_ = list.history_stride;
+  const Index n = list.first.empty() ? 0 : static_cast<Index>(list.first.size()) - 1;
+  first_.assign(n + 1, 0);
+  keys_.clear();
+  values_.clear();
+  for (Index i = 0; i < n; ++i) {
+    first_[i] = static_cast<Index>(keys_.size());
+    for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+      const Real* h = list.history.data() + static_cast<std::size_t>(k) * stride_;
+      if (std::all_of(h, h + stride_, [](Real v) { return v == 0; })) continue;
+      keys_.push_back(partner_key[k]);
+      values_.insert(values_.end(), h, h + stride_);
+    }
+  }
+  first_[n] = static_cast<Index>(keys_.size());
+}
+
+void HistoryCarry::restore(const std::vector<Index>& origin,
+                           const std::vector<GlobalId>& partner_key, ContactList& list) const {
+  if (keys_.empty() || stride_ != list.history_stride) return;
+  const Index n = static_cast<Index>(list.first.size()) - 1;
+  for (Index i = 0; i < n; ++i) {
+    const Index o = origin[i];
+    if (o < 0) continue;
+    const Index b = first_[o], e = first_[o + 1];
+    if (b == e) continue;
+    for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+      for (Index s = b; s < e; ++s) {
+        if (keys_[s] != partner_key[k]) continue;
+        std::copy(values_.begin() + static_cast<std::size_t>(s) * stride_,
+                  values_.begin() + static_cast<std::size_t>(s + 1) * stride_,
+                  list.history.begin() + static_cast<std::size_t>(k) * stride_);
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace grainscale

@@ -1,0 +1,109 @@
+#include "state/particle_store.hpp"
+
+#include <stdexcept>
+
+namespace grainscale {
+
+void ParticleStore::resize_all(Index n) {
+  position.resize(n);
+  velocity.resize(n);
+  angular_velocity.resize(n);
+  force.resize(n);
+  torque.resize(n);
+  radius.resize(n);
+  mass.resize(n);
+  inv_mass.resize(n);
+  inv_inertia.resize(n);
+  material.resize(n);
+  id.resize(n);
+  n_local_ = n;
+}
+
+void ParticleStore::add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const Vec3& w, Real r,
+                              Real m, Real inertia, std::int32_t mat) {
+  if (n_local_ != n_owned_) throw std::logic_error("ParticleStore::add_owned with ghosts present");
+  Index i = n_owned_;
+  resize_all(i + 1);
+  position[i] = x;
+  velocity[i] = v;
+  angular_velocity[i] = w;
+  force[i] = Vec3::Zero();
+  torque[i] = Vec3::Zero();
+  radius[i] = r;
+  mass[i] = m;
+  inv_mass[i] = 1.0 / m;
+  inv_inertia[i] = 1.0 / inertia;
+  material[i] = mat;
+  id[i] = gid;
+  n_owned_ = i + 1;
+}
+
+void ParticleStore::clear_ghosts() {
+  resize_all(n_owned_);
+  ghost_owner.clear();
+  ghost_shift.clear();
+}
+
+void ParticleStore::add_ghost(Index owner, const Vec3& shift) {
+  Index g = n_local_;
+  resize_all(g + 1);
+  position[g] = position[owner] + shift;
+  velocity[g] = velocity[owner];
+  angular_velocity[g] = angular_velocity[owner];
+  force[g] = Vec3::Zero();
+  torque[g] = Vec3::Zero();
+  radius[g] = radius[owner];
+  mass[g] = mass[owner];
+  inv_mass[g] = inv_mass[owner];
+  inv_inertia[g] = inv_inertia[owner];
+  material[g] = material[owner];
+  id[g] = id[owner];
+  ghost_owner.push_back(owner);
+  ghost_shift.push_back(shift);
+}
+
+void ParticleStore::update_ghosts() {
+  Vec3* x = position.data();
+  Vec3* v = velocity.data();
+  Vec3* w = angular_velocity.data();
+  const Index n0 = n_owned_;
+  const Index ng = n_ghost();
+  for (Index k = 0; k < ng; ++k) {
+    const Index o = ghost_owner[k];
+    x[n0 + k] = x[o] + ghost_shift[k];
+    v[n0 + k] = v[o];
+    w[n0 + k] = w[o];
+  }
+}
+
+namespace {
+template <class T>
+void gather(SharedArray<T>& a, const std::vector<Index>& order, std::vector<T>& scratch) {
+  scratch.resize(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = a[order[k]];
+  for (std::size_t k = 0; k < order.size(); ++k) a[k] = scratch[k];
+}
+}  // namespace
+
+void ParticleStore::select_owned(const std::vector<Index>& order) {
+  if (n_local_ != n_owned_) throw std::logic_error("ParticleStore::select_owned with ghosts");
+  std::vector<Vec3> sv;
+  std::vector<Real> sr;
+  std::vector<std::int32_t> si;
+  std::vector<GlobalId> sg;
+  gather(position, order, sv);
+  gather(velocity, order, sv);
+  gather(angular_velocity, order, sv);
+  gather(force, order, sv);
+  gather(torque, order, sv);
+  gather(radius, order, sr);
+  gather(mass, order, sr);
+  gather(inv_mass, order, sr);
+  gather(inv_inertia, order, sr);
+  gather(material, order, si);
+  gather(id, order, sg);
+  resize_all(static_cast<Index>(order.size()));
+  n_owned_ = n_local_;
+}
+
+}  // namespace grainscale

@@ -1,0 +1,48 @@
+// ParticleStore: structure-of-arrays particle data of one level on one rank.
+// Layout: owned particles [0, n_owned), then ghosts [n_owned, n_local). Ghosts are periodic
+// images (and, under MPI, halo copies); each remembers the local owner it mirrors and the
+// shift added to the owner's position.
+#pragma once
+
+#include <vector>
+
+#include "core/shared_array.hpp"
+#include "core/types.hpp"
+
+namespace grainscale {
+
+class ParticleStore {
+ public:
+  // Per-particle arrays (length n_local). Forces and torques include ghost slots, which the
+  // ghost exchange folds back onto their owners.
+  SharedArray<Vec3> position, velocity, angular_velocity, force, torque;
+  SharedArray<Real> radius, mass, inv_mass, inv_inertia;
+  SharedArray<std::int32_t> material;
+  SharedArray<GlobalId> id;
+  // Ghost bookkeeping (length n_ghost, indexed by ghost - n_owned).
+  std::vector<Index> ghost_owner;
+  std::vector<Vec3> ghost_shift;
+
+  Index n_owned() const { return n_owned_; }
+  Index n_ghost() const { return n_local_ - n_owned_; }
+  Index n_local() const { return n_local_; }
+
+  // Appends one owned particle (ghosts must have been cleared).
+  void add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const Vec3& w, Real r, Real m,
+                 Real inertia, std::int32_t mat);
+  void clear_ghosts();
+  // Appends a ghost image of owned particle `owner` shifted by `shift`.
+  void add_ghost(Index owner, const Vec3& shift);
+  // Copies positions and velocities of owners into their ghost images.
+  void update_ghosts();
+  // Reorders and filters owned particles: new slot k takes old particle order[k]; particles
+  // not listed are dropped. Ghosts must be cleared.
+  void select_owned(const std::vector<Index>& order);
+
+ private:
+  void resize_all(Index n);
+  Index n_owned_ = 0;
+  Index n_local_ = 0;
+};
+
+}  // namespace grainscale

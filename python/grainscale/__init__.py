@@ -1,0 +1,28 @@
+"""grainscale: discrete element method for granular materials.
+
+A C++17 core driven from Python. Start with :class:`Simulation`, :class:`Material` and the
+laws in :mod:`grainscale.contact`.
+"""
+
+from __future__ import annotations
+
+from . import contact, geometry, insert, io, timestep
+from .geometry import Box, Plane, Rectangle
+from .materials import Material
+from .simulation import ParticleView, Simulation
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Box",
+    "Material",
+    "ParticleView",
+    "Plane",
+    "Rectangle",
+    "Simulation",
+    "contact",
+    "geometry",
+    "insert",
+    "io",
+    "timestep",
+]

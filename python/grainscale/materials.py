@@ -1,0 +1,45 @@
+"""Materials: elastic properties and density of a particle or wall species (SI units)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._validate import in_range, positive
+
+
+@dataclass(frozen=True)
+class Material:
+    """A solid material.
+
+    Args:
+        density: kg/m^3.
+        youngs_modulus: Young's modulus E in Pa.
+        poisson_ratio: Poisson's ratio nu, in [0, 0.5).
+        name: label used in output and messages.
+
+    Example:
+        >>> glass = Material(density=2500, youngs_modulus=5e7, poisson_ratio=0.3)
+        >>> round(glass.shear_modulus)
+        19230769
+    """
+
+    density: float
+    youngs_modulus: float
+    poisson_ratio: float
+    name: str = "material"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "density", positive("Material", "density", self.density))
+        object.__setattr__(
+            self, "youngs_modulus", positive("Material", "youngs_modulus", self.youngs_modulus)
+        )
+        object.__setattr__(
+            self,
+            "poisson_ratio",
+            in_range("Material", "poisson_ratio", self.poisson_ratio, 0.0, 0.5, closed_hi=False),
+        )
+
+    @property
+    def shear_modulus(self) -> float:
+        """G = E / (2 (1 + nu)), Pa."""
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))

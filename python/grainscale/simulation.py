@@ -1,0 +1,448 @@
+"""Simulation: one DEM system driven from Python, executed by the C++ core.
+
+Python decides what runs and when (outputs, thermo, progress); ``run`` advances whole chunks of
+steps in C++ with the GIL released, so Ctrl-C is honoured between chunks.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time as _time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any, Protocol
+
+import numpy as np
+
+from . import _core
+from ._validate import positive, vector3
+from .contact import ContactLaw, HertzMindlin
+from .geometry import Box, Plane, Rectangle
+from .materials import Material
+
+_VECTOR_FIELDS = ("position", "velocity", "angular_velocity", "force", "torque")
+_SCALAR_FIELDS = ("radius", "mass", "id", "material")
+_WRITABLE_FIELDS = ("position", "velocity", "angular_velocity")
+
+
+class Output(Protocol):
+    """What Simulation.output() accepts (e.g. grainscale.io.VTK)."""
+
+    def next_step(self, step: int, time: float, time_step: float) -> int: ...
+
+    def write(self, sim: Simulation) -> Any: ...
+
+
+class ParticleView:
+    """Zero-copy numpy views of the owned particles, valid only inside ``Simulation.particles()``.
+
+    Attributes (all SI): position, velocity, angular_velocity (N, 3) — writable when the view
+    is; force, torque (N, 3) of the last evaluation (force includes gravity); radius, mass (N,);
+    id (N,) int64 global ids; material (N,) int32 material index. Particle order may change
+    between runs (spatial sorting): identify particles by ``id``.
+    """
+
+    def __init__(self, level: _core.Level, writable: bool) -> None:
+        self._level = level
+        self._writable = writable
+        self._arrays: dict[str, np.ndarray] = {}
+        self._valid = True
+
+    def _get(self, name: str) -> np.ndarray:
+        if not self._valid:
+            raise RuntimeError(
+                f"particle array '{name}' used outside its 'with sim.particles()' block"
+            )
+        a = self._arrays.get(name)
+        if a is None:
+            a = self._level.view(name)
+            if not (self._writable and name in _WRITABLE_FIELDS):
+                a.flags.writeable = False
+            self._arrays[name] = a
+        return a
+
+    def _close(self) -> None:
+        self._valid = False
+        self._arrays.clear()
+
+    def __len__(self) -> int:
+        return int(self._level.num_owned)
+
+    position = property(lambda self: self._get("position"))
+    velocity = property(lambda self: self._get("velocity"))
+    angular_velocity = property(lambda self: self._get("angular_velocity"))
+    force = property(lambda self: self._get("force"))
+    torque = property(lambda self: self._get("torque"))
+    radius = property(lambda self: self._get("radius"))
+    mass = property(lambda self: self._get("mass"))
+    id = property(lambda self: self._get("id"))
+    material = property(lambda self: self._get("material"))
+
+
+class Simulation:
+    """A DEM simulation of spheres in a box, with walls and one contact law.
+
+    Args:
+        domain: the simulation box; periodic axes wrap, particles leaving through a closed axis
+            are removed and counted as lost.
+        contact: the contact law (default ``HertzMindlin()``).
+        gravity: m/s^2.
+        time_step: s; None picks 0.2 x the smallest Rayleigh time at the first run. A step above
+            0.3 x the Rayleigh time is refused unless ``force_time_step`` is True.
+        skin: Verlet skin (m); None picks 0.1 x the largest diameter at the first run.
+        force_time_step: accept a time step above 0.3 t_R.
+        thermo_every: steps between thermo lines (None: no thermo lines; entries are still
+            recorded at the end of each run in ``thermo_log``).
+        quiet: do not print thermo lines.
+
+    Example:
+        >>> import grainscale as gs
+        >>> glass = gs.Material(density=2500, youngs_modulus=5e7, poisson_ratio=0.3)
+        >>> sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)))
+        >>> ids = sim.add_particles(position=[[0.005, 0.005, 0.005]], radius=1e-3, material=glass)
+        >>> sim.run(steps=10, progress=False)
+        >>> sim.step
+        10
+    """
+
+    def __init__(
+        self,
+        domain: Box,
+        contact: ContactLaw | None = None,
+        gravity: Sequence[float] = (0.0, 0.0, -9.81),
+        time_step: float | None = None,
+        skin: float | None = None,
+        force_time_step: bool = False,
+        thermo_every: int | None = None,
+        quiet: bool = False,
+    ) -> None:
+        if not isinstance(domain, Box):
+            raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
+        self.domain = domain
+        self._level = _core.Level(domain.lo, domain.hi, domain.periodic)
+        self._materials: list[Material] = []
+        self.contact: ContactLaw = contact if contact is not None else HertzMindlin()
+        if not isinstance(self.contact, HertzMindlin):
+            raise ValueError(
+                f"Simulation.contact must be a grainscale.contact law, got {self.contact!r}"
+            )
+        self.contact._apply(self._level)
+        self._level.set_gravity(vector3("Simulation", "gravity", gravity))
+        self._force_time_step = bool(force_time_step)
+        self._time_step: float | None = None
+        if time_step is not None:
+            self.time_step = time_step
+        self._skin_fixed = False
+        if skin is not None:
+            self._level.set_skin(positive("Simulation", "skin", skin, " (m)"))
+            self._skin_fixed = True
+        if thermo_every is not None and (int(thermo_every) != thermo_every or thermo_every <= 0):
+            raise ValueError(
+                f"Simulation.thermo_every must be a positive integer, got {thermo_every!r}"
+            )
+        self.thermo_every = None if thermo_every is None else int(thermo_every)
+        self.quiet = quiet
+        self.thermo_log: list[dict[str, float]] = []
+        self._outputs: list[tuple[Output, int]] = []
+        self._walls: list[Plane | Rectangle] = []
+        self._header_printed = False
+        self._rate_clock = (_time.perf_counter(), 0)
+
+    # ----------------------------------------------------------------- configuration
+    @property
+    def time_step(self) -> float | None:
+        """Time step (s); None until resolved at the first run."""
+        return self._time_step
+
+    @time_step.setter
+    def time_step(self, value: float) -> None:
+        dt = positive("Simulation", "time_step", value, " (s)")
+        self._level.set_time_step(dt, self._force_time_step)
+        self._time_step = dt
+
+    @property
+    def skin(self) -> float:
+        """Verlet skin (m)."""
+        return float(self._level.skin)
+
+    def material_index(self, material: Material) -> int:
+        """Index of ``material`` in this simulation (registered on first use)."""
+        if not isinstance(material, Material):
+            raise ValueError(f"material must be a grainscale.Material, got {material!r}")
+        for k, m in enumerate(self._materials):
+            if m == material:
+                return k
+        k = self._level.add_material(
+            material.density, material.youngs_modulus, material.poisson_ratio
+        )
+        self._materials.append(material)
+        return int(k)
+
+    @property
+    def materials(self) -> list[Material]:
+        """Registered materials, by index."""
+        return list(self._materials)
+
+    def add_particles(
+        self,
+        position: np.ndarray | Sequence[Sequence[float]],
+        radius: float | np.ndarray,
+        material: Material,
+        velocity: np.ndarray | Sequence[float] | None = None,
+        angular_velocity: np.ndarray | Sequence[float] | None = None,
+    ) -> np.ndarray:
+        """Add spheres; returns their global ids (int64, never reused).
+
+        Args:
+            position: (N, 3) centres, m. Must lie inside the domain on closed axes.
+            radius: scalar or (N,) radii, m.
+            material: their material.
+            velocity: (N, 3) or (3,) m/s, default zero.
+            angular_velocity: (N, 3) or (3,) rad/s, default zero.
+        """
+        pos = np.ascontiguousarray(np.asarray(position, dtype=float).reshape(-1, 3))
+        n = pos.shape[0]
+        rad = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, dtype=float), (n,)))
+        mat = np.full(n, self.material_index(material), dtype=np.int32)
+
+        def rows(a: Any, name: str) -> np.ndarray | None:
+            if a is None:
+                return None
+            arr = np.asarray(a, dtype=float)
+            if arr.shape not in ((3,), (n, 3)):
+                raise ValueError(
+                    f"Simulation.add_particles.{name} must have shape (3,) or ({n}, 3), "
+                    f"got {arr.shape}"
+                )
+            return np.ascontiguousarray(np.broadcast_to(arr, (n, 3)))
+
+        first = self._level.add_particles(
+            pos, rows(velocity, "velocity"), rows(angular_velocity, "angular_velocity"), rad, mat
+        )
+        return np.arange(first, first + n, dtype=np.int64)
+
+    def add_wall(self, wall: Plane | Rectangle) -> int:
+        """Add a wall; returns its index (for wall_force / wall_torque)."""
+        mat = -1 if wall.material is None else self.material_index(wall.material)
+        if isinstance(wall, Plane):
+            k = self._level.add_plane_wall(wall.point, wall.normal, wall.velocity, mat)
+        elif isinstance(wall, Rectangle):
+            k = self._level.add_rectangle_wall(
+                wall.corner, wall.edge1, wall.edge2, wall.velocity, mat
+            )
+        else:
+            raise ValueError(f"add_wall.wall must be a Plane or Rectangle, got {wall!r}")
+        self._walls.append(wall)
+        return int(k)
+
+    def wall_force(self, index: int) -> np.ndarray:
+        """Force (N) exerted by the particles on wall ``index`` at the last step."""
+        return np.array(self._level.wall_force(self._wall_index(index)))
+
+    def wall_torque(self, index: int) -> np.ndarray:
+        """Torque (N m) exerted by the particles on wall ``index`` about its reference point."""
+        return np.array(self._level.wall_torque(self._wall_index(index)))
+
+    def wall_position(self, index: int) -> np.ndarray:
+        """Current reference point (m) of wall ``index`` (moves with its velocity)."""
+        return np.array(self._level.wall_point(self._wall_index(index)))
+
+    def _wall_index(self, index: int) -> int:
+        if not 0 <= index < len(self._walls):
+            raise ValueError(f"wall index must be in [0, {len(self._walls)}), got {index}")
+        return index
+
+    def output(self, writer: Output) -> None:
+        """Register an output operation (e.g. ``grainscale.io.VTK``), called during run()."""
+        if not hasattr(writer, "next_step") or not hasattr(writer, "write"):
+            raise ValueError(f"Simulation.output needs an output operation, got {writer!r}")
+        self._outputs.append((writer, -1))
+
+    # ----------------------------------------------------------------- state
+    @property
+    def step(self) -> int:
+        return int(self._level.step)
+
+    @property
+    def time(self) -> float:
+        """Simulated time (s)."""
+        return float(self._level.time)
+
+    @property
+    def num_particles(self) -> int:
+        return int(self._level.num_owned)
+
+    @property
+    def lost_particles(self) -> int:
+        """Particles removed because they left the domain through a closed axis."""
+        return int(self._level.lost_particles)
+
+    @contextmanager
+    def particles(self, writable: bool = True) -> Iterator[ParticleView]:
+        """Zero-copy access to the particle arrays, valid only inside the block.
+
+        Changes to position, velocity or angular_velocity are detected on exit: the core then
+        rebuilds its lists / re-evaluates forces before the next step.
+        """
+        view = ParticleView(self._level, writable)
+        before = None
+        if writable:
+            before = {f: self._level.view(f).copy() for f in _WRITABLE_FIELDS}
+        try:
+            yield view
+        finally:
+            view._close()
+            if before is not None:
+                if self.num_particles != len(before["position"]):
+                    return
+                if not np.array_equal(before["position"], self._level.view("position")):
+                    self._level.mark_positions_changed()
+                elif not (
+                    np.array_equal(before["velocity"], self._level.view("velocity"))
+                    and np.array_equal(
+                        before["angular_velocity"], self._level.view("angular_velocity")
+                    )
+                ):
+                    self._level.mark_velocities_changed()
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy (J)."""
+        return float(self._level.kinetic_energy())
+
+    def num_contacts(self) -> int:
+        """Touching contacts (particle-particle and particle-wall) at the last step."""
+        return int(self._level.last_contact_count())
+
+    def contacts(self) -> dict[str, np.ndarray]:
+        """Touching contacts at the last step: id_i, id_j (-1 - wall index for walls),
+        overlap (m), normal (unit, from j to i), force (N, on i)."""
+        return dict(self._level.contacts())
+
+    def neighbor_pairs(self) -> np.ndarray:
+        """(M, 2) global ids of the pairs in the current Verlet list, each pair once."""
+        return np.asarray(self._level.neighbor_pairs())
+
+    def thermo(self) -> dict[str, float]:
+        """Current thermo quantities (see ``thermo_log``)."""
+        now = _time.perf_counter()
+        t0, s0 = self._rate_clock
+        rate = (self.step - s0) * self.num_particles / (now - t0) if now > t0 else 0.0
+        return {
+            "step": self.step,
+            "time": self.time,
+            "kinetic_energy": self.kinetic_energy(),
+            "contacts": self.num_contacts(),
+            "max_overlap_ratio": float(self._level.last_max_overlap_ratio()),
+            "particle_steps_per_second": rate,
+            "particles": self.num_particles,
+            "lost": self.lost_particles,
+        }
+
+    # ----------------------------------------------------------------- running
+    def _resolve_defaults(self) -> None:
+        if not self._skin_fixed and self.num_particles > 0:
+            with self.particles(writable=False) as p:
+                d_max = 2.0 * float(p.radius.max())
+            self._level.set_skin(0.1 * d_max)
+            self._skin_fixed = True
+        elif not self._skin_fixed:
+            self._level.set_skin(1e-3 * float(np.min(self.domain.length)))
+        if self._time_step is None:
+            if self.num_particles == 0:
+                raise ValueError(
+                    "Simulation.time_step must be given when there are no particles, got None"
+                )
+            self.time_step = 0.2 * float(self._level.smallest_rayleigh_time())
+
+    def run(
+        self, steps: int | None = None, until: float | None = None, progress: bool | None = None
+    ) -> None:
+        """Advance the simulation by ``steps`` steps or up to simulated time ``until`` (s).
+
+        Args:
+            steps: number of steps.
+            until: absolute simulated time to reach (s).
+            progress: show a progress bar (default: only on an interactive terminal, not in CI).
+        """
+        if (steps is None) == (until is None):
+            raise ValueError(
+                f"Simulation.run needs exactly one of steps or until, got steps={steps!r}, "
+                f"until={until!r}"
+            )
+        self._resolve_defaults()
+        dt = float(self._time_step)  # type: ignore[arg-type]
+        if steps is not None:
+            if int(steps) != steps or steps < 0:
+                raise ValueError(f"Simulation.run.steps must be a non-negative integer, got {steps!r}")
+            target = self.step + int(steps)
+        else:
+            u = float(until)  # type: ignore[arg-type]
+            if not math.isfinite(u):
+                raise ValueError(f"Simulation.run.until must be finite (s), got {until!r}")
+            target = self.step + max(0, math.ceil((u - self.time) / dt * (1 - 1e-12)))
+        if progress is None:
+            progress = sys.stderr.isatty() and not os.environ.get("CI")
+        bar = None
+        if progress and target > self.step:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=target - self.step, unit="step", leave=False)
+        self._rate_clock = (_time.perf_counter(), self.step)
+        self._outputs = [(w, w.next_step(self.step, self.time, dt)) for w, _ in self._outputs]
+        self._write_due_outputs(dt)
+        chunk = 1
+        try:
+            while self.step < target:
+                stop = target
+                for _, due in self._outputs:
+                    stop = min(stop, due)
+                if self.thermo_every:
+                    stop = min(stop, (self.step // self.thermo_every + 1) * self.thermo_every)
+                n = min(stop - self.step, chunk)
+                t0 = _time.perf_counter()
+                self._level.run(n)
+                elapsed = _time.perf_counter() - t0
+                # Grow chunks while they are short, so Ctrl-C and the bar stay responsive.
+                if elapsed < 0.05 and n == chunk:
+                    chunk = min(2 * chunk, 100000)
+                elif elapsed > 0.2 and chunk > 1:
+                    chunk //= 2
+                if bar is not None:
+                    bar.update(n)
+                self._write_due_outputs(dt)
+                if self.thermo_every and self.step % self.thermo_every == 0:
+                    self._log_thermo(print_line=not self.quiet)
+        finally:
+            if bar is not None:
+                bar.close()
+        if not self.thermo_log or self.thermo_log[-1]["step"] != self.step:
+            self._log_thermo(print_line=False)
+
+    def _write_due_outputs(self, dt: float) -> None:
+        updated = []
+        for writer, due in self._outputs:
+            if due == self.step:
+                writer.write(self)
+                due = writer.next_step(self.step + 1, self.time + dt, dt)
+            updated.append((writer, due))
+        self._outputs = updated
+
+    def _log_thermo(self, print_line: bool) -> None:
+        entry = self.thermo()
+        self._rate_clock = (_time.perf_counter(), self.step)
+        self.thermo_log.append(entry)
+        if print_line:
+            if not self._header_printed:
+                print(
+                    f"{'step':>10} {'time':>11} {'kinetic_energy':>15} {'contacts':>9} "
+                    f"{'max_overlap/r':>13} {'particle_steps/s':>16}"
+                )
+                self._header_printed = True
+            print(
+                f"{entry['step']:>10d} {entry['time']:>11.5g} {entry['kinetic_energy']:>15.6g} "
+                f"{entry['contacts']:>9d} {entry['max_overlap_ratio']:>13.4g} "
+                f"{entry['particle_steps_per_second']:>16.4g}",
+                flush=True,
+            )
