@@ -164,8 +164,13 @@ class Simulation:
 
     @property
     def skin(self) -> float:
-        """Verlet skin (m)."""
+        """Verlet skin (m); changing it rebuilds the lists (contact histories are kept)."""
         return float(self._level.skin)
+
+    @skin.setter
+    def skin(self, value: float) -> None:
+        self._level.set_skin(positive("Simulation", "skin", value, " (m)"))
+        self._skin_fixed = True
 
     def material_index(self, material: Material) -> int:
         """Index of ``material`` in this simulation (registered on first use)."""
@@ -204,7 +209,12 @@ class Simulation:
         """
         pos = np.ascontiguousarray(np.asarray(position, dtype=float).reshape(-1, 3))
         n = pos.shape[0]
-        rad = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, dtype=float), (n,)))
+        rad = np.asarray(radius, dtype=float)
+        if rad.shape not in ((), (n,)):
+            raise ValueError(
+                f"Simulation.add_particles.radius must have shape () or ({n},), got {rad.shape}"
+            )
+        rad = np.ascontiguousarray(np.broadcast_to(rad, (n,)))
         mat = np.full(n, self.material_index(material), dtype=np.int32)
 
         def rows(a: Any, name: str) -> np.ndarray | None:

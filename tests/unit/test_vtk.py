@@ -325,7 +325,7 @@ class FakeSim:
             self.fields["torque"] = rng.normal(size=(n, 3))
 
     @contextlib.contextmanager
-    def particles(self):
+    def particles(self, writable: bool = True):
         view = FakeParticles(self.fields)
         try:
             yield view

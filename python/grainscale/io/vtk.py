@@ -423,7 +423,7 @@ class VTK:
         self.directory.mkdir(parents=True, exist_ok=True)
         name = f"{self.prefix}_{step:08d}.vtp"
         path = self.directory / name
-        with sim.particles() as p:
+        with sim.particles(writable=False) as p:
             point_data = {
                 "radius": p.radius,
                 "velocity": p.velocity,

@@ -1,0 +1,131 @@
+// Shared helpers of the C++ microbenchmarks: wall-clock timing (median of repetitions),
+// seeded lattice packings, ParticleStore set-up and command-line scaling of N.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "state/particle_store.hpp"
+
+namespace bench {
+
+using grainscale::Index;
+using grainscale::Real;
+using grainscale::Vec3;
+
+// Keeps the optimiser from discarding a computed value.
+template <class T>
+inline void do_not_optimize(const T& value) {
+  asm volatile("" : : "r,m"(value) : "memory");
+}
+
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Runs setup() untimed, then body() timed, `reps` times; returns the median of body() in ns.
+// One untimed warm-up round runs first (page faults, caches, branch predictors).
+template <class Setup, class Body>
+double median_ns(int reps, Setup&& setup, Body&& body) {
+  using Clock = std::chrono::steady_clock;
+  setup();
+  body();
+  std::vector<double> t;
+  t.reserve(reps);
+  for (int r = 0; r < reps; ++r) {
+    setup();
+    const auto t0 = Clock::now();
+    body();
+    const auto t1 = Clock::now();
+    t.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+  }
+  return median(t);
+}
+
+// Scale factor for N from argv[1] (default 1); exits with a usage message on a bad value.
+inline double scale_from_args(int argc, char** argv) {
+  if (argc < 2) return 1.0;
+  char* end = nullptr;
+  const double s = std::strtod(argv[1], &end);
+  if (argc > 2 || end == argv[1] || *end != '\0' || !(s > 0) || !std::isfinite(s)) {
+    std::fprintf(stderr, "usage: %s [scale]  (positive factor applied to every N, default 1)\n",
+                 argv[0]);
+    std::exit(2);
+  }
+  return s;
+}
+
+inline Index scaled(Index n, double scale) {
+  return std::max<Index>(8, static_cast<Index>(std::llround(n * scale)));
+}
+
+// The first n sites of a simple-cubic lattice of n_side^3 >= n sites (x fastest), site spacing
+// `spacing` along x and y and `spacing_z` along z, centred in the first octant at
+// (spacing/2, spacing/2, spacing_z/2), each coordinate jittered by a seeded uniform offset in
+// [-jitter, jitter].
+inline std::vector<Vec3> lattice(Index n, Real spacing, Real spacing_z, Real jitter,
+                                 std::uint64_t seed) {
+  Index side = 1;
+  while (static_cast<std::int64_t>(side) * side * side < n) ++side;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<Real> u(-jitter, jitter);
+  std::vector<Vec3> x(n);
+  for (Index k = 0; k < n; ++k) {
+    const Index i = k % side, j = (k / side) % side, l = k / (side * side);
+    x[k] = Vec3((i + 0.5) * spacing, (j + 0.5) * spacing, (l + 0.5) * spacing_z);
+    if (jitter > 0)
+      for (int a = 0; a < 3; ++a) x[k][a] += u(rng);
+  }
+  return x;
+}
+
+// Adds owned particles (ids 0..n-1, material 0, density rho) with optional velocities.
+inline void fill_store(grainscale::ParticleStore& ps, const std::vector<Vec3>& x,
+                       const std::vector<Real>& radius, Real rho,
+                       const std::vector<Vec3>* velocity = nullptr,
+                       const std::vector<Vec3>* angular_velocity = nullptr) {
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const Real r = radius[k];
+    const Real m = rho * (4.0 / 3.0) * M_PI * r * r * r;
+    ps.add_owned(static_cast<grainscale::GlobalId>(k), x[k],
+                 velocity ? (*velocity)[k] : Vec3::Zero(),
+                 angular_velocity ? (*angular_velocity)[k] : Vec3::Zero(), r, m, 0.4 * m * r * r,
+                 0);
+  }
+}
+
+// Reorders the owned particles into cell order, as Level::rebuild does before building lists
+// (the force loop then walks memory mostly sequentially).
+inline void spatial_sort(grainscale::ParticleStore& ps, Real cutoff) {
+  grainscale::CellGrid grid;
+  grid.build(ps.position.data(), ps.n_owned(), cutoff, 2 * ps.n_owned() + 64);
+  const std::vector<Index> order(grid.particles.begin(), grid.particles.end());
+  ps.select_owned(order);
+}
+
+inline Real max_radius(const grainscale::ParticleStore& ps) {
+  Real r = 0;
+  for (Index i = 0; i < ps.n_owned(); ++i) r = std::max(r, ps.radius[i]);
+  return r;
+}
+
+// One result line: "name: value unit (N=..., reps=...[, extra])".
+inline void report(const std::string& name, double value, const char* unit, Index n, int reps,
+                   const std::string& extra = "") {
+  std::printf("%s: %.4g %s (N=%d, reps=%d%s%s)\n", name.c_str(), value, unit, n, reps,
+              extra.empty() ? "" : ", ", extra.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace bench
