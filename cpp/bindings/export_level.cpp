@@ -22,11 +22,12 @@ py::array view(SharedArray<T>& a, Index n, std::vector<py::ssize_t> shape) {
   auto* keep = new std::shared_ptr<T[]>(a.buffer());
   py::capsule owner(keep, [](void* p) { delete static_cast<std::shared_ptr<T[]>*>(p); });
   std::vector<py::ssize_t> strides;
-  if (shape.size() == 2) strides = {static_cast<py::ssize_t>(sizeof(T)), sizeof(Elem)};
-  else strides = {static_cast<py::ssize_t>(sizeof(T))};
+  if (shape.size() == 2)
+    strides = {static_cast<py::ssize_t>(sizeof(T)), sizeof(Elem)};
+  else
+    strides = {static_cast<py::ssize_t>(sizeof(T))};
   shape[0] = n;
-  return py::array(py::dtype::of<Elem>(), shape, strides,
-                   reinterpret_cast<Elem*>(a.data()), owner);
+  return py::array(py::dtype::of<Elem>(), shape, strides, reinterpret_cast<Elem*>(a.data()), owner);
 }
 
 const Real* optional_rows(const py::object& o, Index n, const char* name, Array3& keep) {
@@ -41,78 +42,80 @@ const Real* optional_rows(const py::object& o, Index n, const char* name, Array3
 
 void export_level(py::module_& m) {
   py::class_<Level>(m, "Level")
-      .def(py::init([](std::array<Real, 3> lo, std::array<Real, 3> hi,
-                       std::array<bool, 3> periodic) {
-             return Level(Domain(to_vec3(lo), to_vec3(hi), periodic));
-           }),
+      .def(py::init(
+               [](std::array<Real, 3> lo, std::array<Real, 3> hi, std::array<bool, 3> periodic) {
+                 return Level(Domain(to_vec3(lo), to_vec3(hi), periodic));
+               }),
            py::arg("lo"), py::arg("hi"), py::arg("periodic"))
-      .def("add_material",
-           [](Level& l, Real density, Real E, Real nu) {
-             return l.add_material({density, E, nu});
-           },
-           py::arg("density"), py::arg("youngs_modulus"), py::arg("poisson_ratio"))
-      .def("set_hertz_mindlin",
-           [](Level& l, Real e, Real mu, bool limit_force, bool tangential_damping,
-              bool incremental) {
-             HertzMindlinSettings s;
-             s.restitution = e;
-             s.friction = mu;
-             s.limit_force = limit_force;
-             s.tangential_damping = tangential_damping;
-             s.history = incremental ? TangentialHistory::Incremental : TangentialHistory::Total;
-             l.set_contact_law(HertzMindlin(s));
-           },
-           py::arg("restitution"), py::arg("friction"), py::arg("limit_force"),
-           py::arg("tangential_damping"), py::arg("incremental"))
+      .def(
+          "add_material",
+          [](Level& l, Real density, Real E, Real nu) { return l.add_material({density, E, nu}); },
+          py::arg("density"), py::arg("youngs_modulus"), py::arg("poisson_ratio"))
+      .def(
+          "set_hertz_mindlin",
+          [](Level& l, Real e, Real mu, bool limit_force, bool tangential_damping,
+             bool incremental) {
+            HertzMindlinSettings s;
+            s.restitution = e;
+            s.friction = mu;
+            s.limit_force = limit_force;
+            s.tangential_damping = tangential_damping;
+            s.history = incremental ? TangentialHistory::Incremental : TangentialHistory::Total;
+            l.set_contact_law(HertzMindlin(s));
+          },
+          py::arg("restitution"), py::arg("friction"), py::arg("limit_force"),
+          py::arg("tangential_damping"), py::arg("incremental"))
       .def("set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); })
       .def("set_time_step", &Level::set_time_step, py::arg("time_step"), py::arg("force"))
       .def("set_skin", &Level::set_skin)
-      .def("add_particles",
-           [](Level& l, const Array3& position, const py::object& velocity,
-              const py::object& angular_velocity,
-              const py::array_t<Real, py::array::c_style | py::array::forcecast>& radius,
-              const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>&
-                  material) {
-             if (position.ndim() != 2 || position.shape(1) != 3)
-               throw py::value_error("add_particles.position must have shape (N, 3)");
-             const Index n = static_cast<Index>(position.shape(0));
-             if (radius.ndim() != 1 || radius.shape(0) != n)
-               throw py::value_error("add_particles.radius must have shape (N,)");
-             if (material.ndim() != 1 || material.shape(0) != n)
-               throw py::value_error("add_particles.material must have shape (N,)");
-             Array3 kv, kw;
-             const Real* v = optional_rows(velocity, n, "velocity", kv);
-             const Real* w = optional_rows(angular_velocity, n, "angular_velocity", kw);
-             return l.add_particles(n, position.data(), v, w, radius.data(), material.data());
-           },
-           py::arg("position"), py::arg("velocity"), py::arg("angular_velocity"),
-           py::arg("radius"), py::arg("material"))
-      .def("add_plane_wall",
-           [](Level& l, std::array<Real, 3> point, std::array<Real, 3> normal,
-              std::array<Real, 3> velocity, int material) {
-             PlaneWall w;
-             w.shape = PlaneWall::Shape::Infinite;
-             w.point = to_vec3(point);
-             w.normal = to_vec3(normal);
-             w.velocity = to_vec3(velocity);
-             w.material = material;
-             return l.add_wall(w);
-           },
-           py::arg("point"), py::arg("normal"), py::arg("velocity"), py::arg("material"))
-      .def("add_rectangle_wall",
-           [](Level& l, std::array<Real, 3> corner, std::array<Real, 3> edge1,
-              std::array<Real, 3> edge2, std::array<Real, 3> velocity, int material) {
-             PlaneWall w;
-             w.shape = PlaneWall::Shape::Rectangle;
-             w.point = to_vec3(corner);
-             w.edge1 = to_vec3(edge1);
-             w.edge2 = to_vec3(edge2);
-             w.velocity = to_vec3(velocity);
-             w.material = material;
-             return l.add_wall(w);
-           },
-           py::arg("corner"), py::arg("edge1"), py::arg("edge2"), py::arg("velocity"),
-           py::arg("material"))
+      .def(
+          "add_particles",
+          [](Level& l, const Array3& position, const py::object& velocity,
+             const py::object& angular_velocity,
+             const py::array_t<Real, py::array::c_style | py::array::forcecast>& radius,
+             const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>& material) {
+            if (position.ndim() != 2 || position.shape(1) != 3)
+              throw py::value_error("add_particles.position must have shape (N, 3)");
+            const Index n = static_cast<Index>(position.shape(0));
+            if (radius.ndim() != 1 || radius.shape(0) != n)
+              throw py::value_error("add_particles.radius must have shape (N,)");
+            if (material.ndim() != 1 || material.shape(0) != n)
+              throw py::value_error("add_particles.material must have shape (N,)");
+            Array3 kv, kw;
+            const Real* v = optional_rows(velocity, n, "velocity", kv);
+            const Real* w = optional_rows(angular_velocity, n, "angular_velocity", kw);
+            return l.add_particles(n, position.data(), v, w, radius.data(), material.data());
+          },
+          py::arg("position"), py::arg("velocity"), py::arg("angular_velocity"), py::arg("radius"),
+          py::arg("material"))
+      .def(
+          "add_plane_wall",
+          [](Level& l, std::array<Real, 3> point, std::array<Real, 3> normal,
+             std::array<Real, 3> velocity, int material) {
+            PlaneWall w;
+            w.shape = PlaneWall::Shape::Infinite;
+            w.point = to_vec3(point);
+            w.normal = to_vec3(normal);
+            w.velocity = to_vec3(velocity);
+            w.material = material;
+            return l.add_wall(w);
+          },
+          py::arg("point"), py::arg("normal"), py::arg("velocity"), py::arg("material"))
+      .def(
+          "add_rectangle_wall",
+          [](Level& l, std::array<Real, 3> corner, std::array<Real, 3> edge1,
+             std::array<Real, 3> edge2, std::array<Real, 3> velocity, int material) {
+            PlaneWall w;
+            w.shape = PlaneWall::Shape::Rectangle;
+            w.point = to_vec3(corner);
+            w.edge1 = to_vec3(edge1);
+            w.edge2 = to_vec3(edge2);
+            w.velocity = to_vec3(velocity);
+            w.material = material;
+            return l.add_wall(w);
+          },
+          py::arg("corner"), py::arg("edge1"), py::arg("edge2"), py::arg("velocity"),
+          py::arg("material"))
       .def("num_walls", [](Level& l) { return l.walls().size(); })
       .def("wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); })
       .def("wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); })
@@ -172,20 +175,18 @@ void export_level(py::module_& m) {
              }
              return out;
            })
-      .def("view",
-           [](Level& l, const std::string& name) -> py::array {
-             ParticleStore& ps = l.particles();
-             const Index n = ps.n_owned();
-             if (name == "position") return view<Vec3, Real>(ps.position, n, {0, 3});
-             if (name == "velocity") return view<Vec3, Real>(ps.velocity, n, {0, 3});
-             if (name == "angular_velocity")
-               return view<Vec3, Real>(ps.angular_velocity, n, {0, 3});
-             if (name == "force") return view<Vec3, Real>(ps.force, n, {0, 3});
-             if (name == "torque") return view<Vec3, Real>(ps.torque, n, {0, 3});
-             if (name == "radius") return view<Real, Real>(ps.radius, n, {0});
-             if (name == "mass") return view<Real, Real>(ps.mass, n, {0});
-             if (name == "id") return view<GlobalId, GlobalId>(ps.id, n, {0});
-             if (name == "material") return view<std::int32_t, std::int32_t>(ps.material, n, {0});
-             throw py::value_error("unknown particle array '" + name + "'");
-           });
+      .def("view", [](Level& l, const std::string& name) -> py::array {
+        ParticleStore& ps = l.particles();
+        const Index n = ps.n_owned();
+        if (name == "position") return view<Vec3, Real>(ps.position, n, {0, 3});
+        if (name == "velocity") return view<Vec3, Real>(ps.velocity, n, {0, 3});
+        if (name == "angular_velocity") return view<Vec3, Real>(ps.angular_velocity, n, {0, 3});
+        if (name == "force") return view<Vec3, Real>(ps.force, n, {0, 3});
+        if (name == "torque") return view<Vec3, Real>(ps.torque, n, {0, 3});
+        if (name == "radius") return view<Real, Real>(ps.radius, n, {0});
+        if (name == "mass") return view<Real, Real>(ps.mass, n, {0});
+        if (name == "id") return view<GlobalId, GlobalId>(ps.id, n, {0});
+        if (name == "material") return view<std::int32_t, std::int32_t>(ps.material, n, {0});
+        throw py::value_error("unknown particle array '" + name + "'");
+      });
 }

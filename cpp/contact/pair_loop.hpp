@@ -49,7 +49,8 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       }
       const Real dist = std::sqrt(d2);
       const Real overlap = rsum - dist;
-      const Vec3 nrm = d / dist;
+      // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
+      const Vec3 nrm = dist > 0 ? Vec3(d / dist) : Vec3(Vec3::UnitZ());
       const Real ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
       const Vec3 vrel = vi - v[j] - (ai * wi + aj * w[j]).cross(nrm);
       const ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};

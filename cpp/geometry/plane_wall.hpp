@@ -11,19 +11,19 @@
 namespace grainscale {
 
 struct WallContactGeometry {
-  Vec3 normal;   // unit, from the wall to the particle centre
-  Real distance; // from the particle centre to the closest wall point
+  Vec3 normal;    // unit, from the wall to the particle centre
+  Real distance;  // from the particle centre to the closest wall point
 };
 
 struct PlaneWall {
   enum class Shape { Infinite, Rectangle };
   Shape shape = Shape::Infinite;
-  Vec3 point = Vec3::Zero();   // a point of the plane / the rectangle's corner; torque reference
-  Vec3 normal = Vec3::UnitZ(); // unit; for Infinite the side particles live on
+  Vec3 point = Vec3::Zero();    // a point of the plane / the rectangle's corner; torque reference
+  Vec3 normal = Vec3::UnitZ();  // unit; for Infinite the side particles live on
   Vec3 edge1 = Vec3::Zero(), edge2 = Vec3::Zero();  // Rectangle spans point + a edge1 + b edge2
   Vec3 velocity = Vec3::Zero();
-  int material = -1;           // index into MaterialTable, -1 for a rigid wall
-  int law_material = -1;       // index used by the contact law (rigid pseudo-material for -1)
+  int material = -1;      // index into MaterialTable, -1 for a rigid wall
+  int law_material = -1;  // index used by the contact law (rigid pseudo-material for -1)
   // Results of the last force evaluation: force and torque exerted by particles on the wall.
   Vec3 force = Vec3::Zero();
   Vec3 torque = Vec3::Zero();

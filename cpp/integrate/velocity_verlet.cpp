@@ -19,7 +19,8 @@ Real kick_drift(ParticleStore& ps, Real dt, const std::vector<Vec3>& reference) 
     v[i] += (half * im[i]) * f[i];
     w[i] += (half * ii[i]) * t[i];
     x[i] += dt * v[i];
-    max_d2 = std::max(max_d2, (x[i] - reference[i]).squaredNorm());
+    const Real d2 = (x[i] - reference[i]).squaredNorm();
+    if (d2 > max_d2 || d2 != d2) max_d2 = d2;  // a NaN sticks, so it forces a (checked) rebuild
   }
   return max_d2;
 }

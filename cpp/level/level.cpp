@@ -81,9 +81,9 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
                     material[k]);
     if (velocity && !Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]).allFinite())
       throw_invalid("add_particles.velocity", "finite (m/s)", k);
-    if (angular_velocity && !Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
-                                  angular_velocity[3 * k + 2])
-                                 .allFinite())
+    if (angular_velocity &&
+        !Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1], angular_velocity[3 * k + 2])
+             .allFinite())
       throw_invalid("add_particles.angular_velocity", "finite (rad/s)", k);
   }
   if (lists_valid_) save_histories();
@@ -95,8 +95,8 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
     const Real r = radius[k];
     const Real m = materials_[material[k]].density * (4.0 / 3.0) * M_PI * r * r * r;
     const Vec3 x(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
-    const Vec3 v = velocity ? Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2])
-                            : Vec3::Zero();
+    const Vec3 v =
+        velocity ? Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]) : Vec3::Zero();
     const Vec3 w = angular_velocity ? Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
                                            angular_velocity[3 * k + 2])
                                     : Vec3::Zero();
@@ -192,8 +192,8 @@ void Level::validate_periodic_lengths() const {
   for (int a = 0; a < 3; ++a)
     if (domain_.periodic[a] && domain_.length()[a] < 2 * cutoff) {
       std::ostringstream c;
-      c << "at least 2 x (largest diameter + skin) = " << 2 * cutoff
-        << " m along periodic axis " << "xyz"[a];
+      c << "at least 2 x (largest diameter + skin) = " << 2 * cutoff << " m along periodic axis "
+        << "xyz"[a];
       throw_invalid("Box.hi - Box.lo", c.str(), domain_.length()[a]);
     }
 }
@@ -212,6 +212,13 @@ void Level::save_histories() {
 }
 
 void Level::rebuild() {
+  for (Index i = 0; i < ps_.n_owned(); ++i)
+    if (!ps_.position[i].allFinite() || !ps_.velocity[i].allFinite()) {
+      std::ostringstream msg;
+      msg << "particle " << ps_.id[i] << " has a non-finite position or velocity at step " << step_
+          << ": the simulation is unstable (time step too large for the stiffness?)";
+      throw std::runtime_error(msg.str());
+    }
   if (lists_valid_) save_histories();
   ps_.clear_ghosts();
   wrap_periodic(ps_, domain_);
@@ -293,7 +300,7 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     }
     ++step_;
     time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;
-    if (std::sqrt(comm_.max(max_d2)) + wall_shift > half_skin)
+    if (!(std::sqrt(comm_.max(max_d2)) + wall_shift <= half_skin))
       rebuild();
     else
       ghosts_.forward(ps_);

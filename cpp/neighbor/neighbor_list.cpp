@@ -2,8 +2,7 @@
 
 namespace grainscale {
 
-void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin,
-                     ContactList& list) {
+void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list) {
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
   const Real* r = ps.radius.data();

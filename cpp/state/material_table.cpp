@@ -31,7 +31,8 @@ PairModuli MaterialTable::pair_moduli(int i, int j) const {
   Real cn_i, cs_i, cn_j, cs_j;
   compliance(i, cn_i, cs_i);
   compliance(j, cn_j, cs_j);
-  if (cn_i + cn_j == 0) throw InvalidArgument("a contact between two rigid bodies has no stiffness");
+  if (cn_i + cn_j == 0)
+    throw InvalidArgument("a contact between two rigid bodies has no stiffness");
   return {1 / (cn_i + cn_j), 1 / (cs_i + cs_j)};
 }
 

@@ -266,3 +266,23 @@ def test_results_do_not_depend_on_the_skin_contact_history_survives_rebuilds():
     # The control shows the check is sensitive: losing the springs once moves things a lot.
     assert np.abs(xl - xa).max() > 1e-7
     assert np.abs(wl - wa).max() > 1e-3 * np.abs(wa).max()
+
+
+def test_unstable_run_raises_instead_of_crashing():
+    sim = small_sim(gravity=(0, 0, 0), time_step=1e-5)
+    sim.add_particles(
+        position=[[0.01, 0.01, 0.01], [0.0101, 0.01, 0.01]], radius=1e-3, material=GLASS
+    )
+    with sim.particles() as p:
+        p.velocity[0] = (float("nan"), 0.0, 0.0)
+    with pytest.raises(RuntimeError, match="non-finite position or velocity"):
+        sim.run(steps=10)
+
+
+def test_coincident_particles_do_not_produce_nan():
+    sim = small_sim(gravity=(0, 0, 0))
+    sim.add_particles(position=[[0.01, 0.01, 0.01]] * 2, radius=1e-3, material=GLASS)
+    sim.run(steps=1)
+    with sim.particles() as p:
+        assert np.isfinite(p.force).all()
+        assert p.force[0, 2] != 0.0
