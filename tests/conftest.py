@@ -5,7 +5,8 @@
 * ``run_impact``: drives a single two-body normal impact (sphere-sphere or sphere-rigid plane)
   and returns the time series of overlap, normal force and normal velocity.
 
-Conventions follow CASES.md section 0: compression positive, overlap delta = r_i + r_j - |x_i - x_j|,
+Conventions follow CASES.md section 0: compression positive,
+overlap delta = r_i + r_j - |x_i - x_j|,
 rigid wall: E* = E/(1 - nu^2), G* = G/(2 - nu), R* = r, m* = m.
 """
 
@@ -15,12 +16,12 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import grainscale as gs
 import numpy as np
 import pytest
 
-import grainscale as gs
-
-# Hertz duration integral I = int_0^1 dx / sqrt(1 - x^(5/2)) (CASES.md A1), t_c = 2 I delta_max / v0.
+# Hertz duration integral I = int_0^1 dx / sqrt(1 - x^(5/2)) (CASES.md A1):
+# t_c = 2 I delta_max / v0.
 HERTZ_DURATION_INTEGRAL = 1.471638
 
 # CASES.md B0: E (Pa), nu, rho (kg/m^3).
@@ -223,6 +224,7 @@ def _run_impact(
         half = 4.0 * radius + 2.0 * v0 * duration
     w = np.zeros_like(x) if angular_velocity is None else np.asarray(angular_velocity, float)
     sim = gs.Simulation(
+        record_contacts=True,
         domain=gs.Box(lo=(-half, -half, -half), hi=(half, half, half)),
         contact=law,
         gravity=(0.0, 0.0, 0.0),
@@ -231,19 +233,48 @@ def _run_impact(
     )
     if two_spheres:
         ids = [
-            int(sim.add_particles(position=x[:1], radius=radius, material=material,
-                                  velocity=v[:1], angular_velocity=w[:1])[0]),
-            int(sim.add_particles(position=x[1:], radius=r2, material=mat2,
-                                  velocity=v[1:], angular_velocity=w[1:])[0]),
+            int(
+                sim.add_particles(
+                    position=x[:1],
+                    radius=radius,
+                    material=material,
+                    velocity=v[:1],
+                    angular_velocity=w[:1],
+                )[0]
+            ),
+            int(
+                sim.add_particles(
+                    position=x[1:], radius=r2, material=mat2, velocity=v[1:], angular_velocity=w[1:]
+                )[0]
+            ),
         ]
     else:
-        ids = [int(sim.add_particles(position=x, radius=radius, material=material,
-                                     velocity=v, angular_velocity=w)[0])]
+        ids = [
+            int(
+                sim.add_particles(
+                    position=x, radius=radius, material=material, velocity=v, angular_velocity=w
+                )[0]
+            )
+        ]
         sim.add_wall(gs.geometry.Plane(point=(0, 0, 0), normal=(0, 0, 1), material=None))
 
-    rec: dict[str, list] = {k: [] for k in (
-        "t", "step", "overlap", "force_n", "approach", "vel", "omega", "force",
-        "cforce", "cnormal", "coverlap", "ncontacts")}
+    rec: dict[str, list] = {
+        k: []
+        for k in (
+            "t",
+            "step",
+            "overlap",
+            "force_n",
+            "approach",
+            "vel",
+            "omega",
+            "force",
+            "cforce",
+            "cnormal",
+            "coverlap",
+            "ncontacts",
+        )
+    }
 
     def record(step: int) -> None:
         with sim.particles() as p:

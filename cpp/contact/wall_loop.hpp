@@ -53,7 +53,8 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Plane
       if constexpr (kStats) {
         ++stats.contacts;
         stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / ri);
-        stats.records.push_back(
+        if (stats.record)
+          stats.records.push_back(
             {ps.id[i], -1 - static_cast<GlobalId>(list.partner[k]), overlap, nrm, F});
       }
     }

@@ -60,6 +60,9 @@ class Level {
   std::int64_t lost_particles() const { return lost_; }
   std::int64_t rebuilds() const { return rebuilds_; }
   const ContactStats& last_stats() const { return stats_; }
+  // Keep a record of every touching contact at the last step of each run() (diagnostics).
+  void set_record_contacts(bool on) { stats_.record = on; }
+  bool record_contacts() const { return stats_.record; }
   Real kinetic_energy() const;
   Real smallest_rayleigh_time() const;
   // Pairs (global ids) of the current particle list, each unordered pair once.

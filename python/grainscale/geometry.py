@@ -115,10 +115,10 @@ def box_walls(box: Box, material: Material | None = None) -> list[Plane]:
     for a in range(3):
         if box.periodic[a]:
             continue
-        n = np.zeros(3)
-        n[a] = 1.0
-        walls.append(Plane(point=box.lo, normal=tuple(n), material=material))
-        walls.append(Plane(point=box.hi, normal=tuple(-n), material=material))
+        up = (float(a == 0), float(a == 1), float(a == 2))
+        down = (-up[0], -up[1], -up[2])
+        walls.append(Plane(point=box.lo, normal=up, material=material))
+        walls.append(Plane(point=box.hi, normal=down, material=material))
     return walls
 
 

@@ -96,6 +96,8 @@ class Simulation:
         thermo_every: steps between thermo lines (None: no thermo lines; entries are still
             recorded at the end of each run in ``thermo_log``).
         quiet: do not print thermo lines.
+        record_contacts: keep a record of every touching contact at the end of each run, for
+            ``contacts()`` (72 bytes per contact; off by default).
 
     Example:
         >>> import grainscale as gs
@@ -117,6 +119,7 @@ class Simulation:
         force_time_step: bool = False,
         thermo_every: int | None = None,
         quiet: bool = False,
+        record_contacts: bool = False,
     ) -> None:
         if not isinstance(domain, Box):
             raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
@@ -144,6 +147,7 @@ class Simulation:
             )
         self.thermo_every = None if thermo_every is None else int(thermo_every)
         self.quiet = quiet
+        self._level.record_contacts = bool(record_contacts)
         self.thermo_log: list[dict[str, float]] = []
         self._outputs: list[tuple[Output, int]] = []
         self._walls: list[Plane | Rectangle] = []
@@ -325,9 +329,25 @@ class Simulation:
         """Touching contacts (particle-particle and particle-wall) at the last step."""
         return int(self._level.last_contact_count())
 
+    @property
+    def record_contacts(self) -> bool:
+        """Whether ``contacts()`` is available (see the constructor argument)."""
+        return bool(self._level.record_contacts)
+
+    @record_contacts.setter
+    def record_contacts(self, on: bool) -> None:
+        self._level.record_contacts = bool(on)
+
     def contacts(self) -> dict[str, np.ndarray]:
         """Touching contacts at the last step: id_i, id_j (-1 - wall index for walls),
-        overlap (m), normal (unit, from j to i), force (N, on i)."""
+        overlap (m), normal (unit, from j to i), force (N, on i).
+
+        Needs ``record_contacts=True`` before the run whose last step is reported.
+        """
+        if not self.record_contacts:
+            raise RuntimeError(
+                "Simulation.contacts() needs record_contacts=True (set it before run())"
+            )
         return dict(self._level.contacts())
 
     def neighbor_pairs(self) -> np.ndarray:

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import math
 
+import grainscale as gs
 import numpy as np
 import pytest
-
-import grainscale as gs
 
 STEPS_PER_CONTACT = 500  # dt = t_c / 500 (CASES.md section 0 asks for dt <= t_c / 200)
 
@@ -28,15 +27,33 @@ TOL_BRANCH = 5e-3
 
 # name: (material, radius m, v0 m/s, two spheres?, table: m kg, E* Pa, delta_max m, F_max N, t_c s)
 CASES = {
-    "B1-glass": ("glass", 0.010, 20.0, True, (1.172861e-2, 2.500000e10, 274.11e-6, 10.697e3, 40.34e-6)),
+    "B1-glass": (
+        "glass",
+        0.010,
+        20.0,
+        True,
+        (1.172861e-2, 2.500000e10, 274.11e-6, 10.697e3, 40.34e-6),
+    ),
     "B1-limestone": (
-        "limestone", 0.010, 20.0, True, (1.047198e-2, 1.066667e10, 368.30e-6, 7.108e3, 54.20e-6)
+        "limestone",
+        0.010,
+        20.0,
+        True,
+        (1.047198e-2, 1.066667e10, 368.30e-6, 7.108e3, 54.20e-6),
     ),
     "B2-al_alloy": (
-        "al_alloy_t2", 0.10, 0.2, False, (11.30554, 7.692308e10, 49.72e-6, 11.370e3, 731.7e-6)
+        "al_alloy_t2",
+        0.10,
+        0.2,
+        False,
+        (11.30554, 7.692308e10, 49.72e-6, 11.370e3, 731.7e-6),
     ),
     "B2-mg_alloy": (
-        "mg_alloy", 0.10, 0.2, False, (7.539822, 4.558405e10, 52.12e-6, 7.233e3, 767.1e-6)
+        "mg_alloy",
+        0.10,
+        0.2,
+        False,
+        (7.539822, 4.558405e10, 52.12e-6, 7.233e3, 767.1e-6),
     ),
 }
 
@@ -61,7 +78,10 @@ def impact(materials, hertz_pair, run_impact):
             dt = tc / STEPS_PER_CONTACT / refine
             law = gs.contact.HertzMindlin(restitution=1.0, friction=0.0)
             res = run_impact(
-                law, mat, radius, v0,
+                law,
+                mat,
+                radius,
+                v0,
                 time_step=dt,
                 duration=3.2 * tc,  # >= 2 t_c after separation (CASES.md B0)
                 other=(mat, radius) if two else None,
@@ -107,11 +127,14 @@ def test_closed_form_matches_table(case, materials, hertz_pair):
         "F_max (1.25 m* v0^2 / delta_max)": (1.25 * pair.mass * v0**2 / pair.max_overlap(v0), fmax),
         "t_c": (pair.contact_time(v0), tc),
         "t_c (2.868266 form)": (
-            2.868266 * (pair.mass**2 / (pair.radius * pair.youngs**2 * v0)) ** 0.2, tc
+            2.868266 * (pair.mass**2 / (pair.radius * pair.youngs**2 * v0)) ** 0.2,
+            tc,
         ),
     }
     for name, (value, table) in got.items():
-        assert abs(value / table - 1.0) <= 1e-3, f"{case} {name}: closed form {value:.6g}, table {table:.6g}"
+        assert abs(value / table - 1.0) <= 1e-3, (
+            f"{case} {name}: closed form {value:.6g}, table {table:.6g}"
+        )
 
     api = gs.timestep.hertz_contact_time(mat, radius, v0, other=(mat, radius) if two else None)
     assert abs(api / pair.contact_time(v0) - 1.0) <= 1e-5, (
@@ -143,8 +166,8 @@ def test_contact_time(case, impact):
     tol = max(TOL_TC_REL * tc_ref, 2.0 * res.time_step)
     assert math.isfinite(tc), f"{case}: contact end not found ({res.notes})"
     assert abs(tc - tc_ref) <= tol, (
-        f"{case}: t_c = {tc:.6e} s, A1 {tc_ref:.6e} s (diff {tc - tc_ref:+.3e} s, gate {tol:.3e} s, "
-        f"dt = {res.time_step:.3e} s)"
+        f"{case}: t_c = {tc:.6e} s, A1 {tc_ref:.6e} s (diff {tc - tc_ref:+.3e} s, "
+        f"gate {tol:.3e} s, dt = {res.time_step:.3e} s)"
     )
 
 
@@ -191,7 +214,9 @@ def test_contacts_report_matches_state(case, impact):
     assert np.all(res.num_contacts[apart] == 0), (
         f"{case}: num_contacts while apart = {np.unique(res.num_contacts[apart])}"
     )
-    err_overlap = np.max(np.abs(res.contact_overlap - np.clip(res.overlap, 0, None))[in_contact | apart])
+    err_overlap = np.max(
+        np.abs(res.contact_overlap - np.clip(res.overlap, 0, None))[in_contact | apart]
+    )
     assert err_overlap <= 1e-6 * dmax, (
         f"{case}: contacts()['overlap'] differs from r1 + r2 - |x1 - x2| by {err_overlap:.3e} m"
     )

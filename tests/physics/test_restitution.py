@@ -15,11 +15,10 @@ from __future__ import annotations
 import math
 from functools import cache
 
+import grainscale as gs
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-
-import grainscale as gs
 
 RADIUS = 2.5e-3
 V0 = 3.9
@@ -33,14 +32,46 @@ TOL_TC = 1e-2
 
 # CASES.md A2 / A3 tables (published in CASES.md; used to check the closed forms below).
 TABLE_E = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98)
-TABLE_ZETA = (0.59116, 0.45595, 0.35786, 0.28000, 0.21545, 0.16049, 0.11281, 0.07085, 0.03352,
-              0.01632, 0.00643)
-TABLE_E_F = (0.2527, 0.3249, 0.3971, 0.4720, 0.5503, 0.6323, 0.7182, 0.8081, 0.9020, 0.9505,
-             0.9801)
-TABLE_TC_TENSION = (1.5107, 1.2959, 1.1949, 1.1342, 1.0934, 1.0640, 1.0419, 1.0247, 1.0111,
-                    1.0053, 1.0020)
-TABLE_TC_NO_TENSION = (0.7880, 0.8199, 0.8461, 0.8693, 0.8906, 0.9108, 0.9305, 0.9502, 0.9711,
-                       0.9830, 0.9916)
+TABLE_ZETA = (
+    0.59116,
+    0.45595,
+    0.35786,
+    0.28000,
+    0.21545,
+    0.16049,
+    0.11281,
+    0.07085,
+    0.03352,
+    0.01632,
+    0.00643,
+)
+TABLE_E_F = (0.2527, 0.3249, 0.3971, 0.4720, 0.5503, 0.6323, 0.7182, 0.8081, 0.9020, 0.9505, 0.9801)
+TABLE_TC_TENSION = (
+    1.5107,
+    1.2959,
+    1.1949,
+    1.1342,
+    1.0934,
+    1.0640,
+    1.0419,
+    1.0247,
+    1.0111,
+    1.0053,
+    1.0020,
+)
+TABLE_TC_NO_TENSION = (
+    0.7880,
+    0.8199,
+    0.8461,
+    0.8693,
+    0.8906,
+    0.9108,
+    0.9305,
+    0.9502,
+    0.9711,
+    0.9830,
+    0.9916,
+)
 # B3 elastic values (e = 1): delta_max (m), F_max (N), t_c (s).
 TABLE_B3 = {"al_oxide": (8.089e-6, 615.4, 6.104e-6), "cast_iron": (17.19e-6, 506.8, 12.97e-6)}
 
@@ -93,8 +124,9 @@ def hertz_damped_reference(e: float, no_tension: bool) -> tuple[float, float, fl
     event = force_zero if no_tension else overlap_zero
     event.terminal = True
     event.direction = -1
-    sol = solve_ivp(rhs, (0.0, 50.0), [0.0, 1.0], method="DOP853", events=event,
-                    rtol=1e-11, atol=1e-14)
+    sol = solve_ivp(
+        rhs, (0.0, 50.0), [0.0, 1.0], method="DOP853", events=event, rtol=1e-11, atol=1e-14
+    )
     t_end = float(sol.t_events[0][0])
     d_end, p_end = (float(v) for v in sol.y_events[0][0])
     t_sep = t_end + (max(d_end, 0.0) / -p_end if no_tension and p_end < 0 else 0.0)
@@ -122,7 +154,10 @@ def bounce(materials, hertz_pair, run_impact):
             # outside this window shows up as NaN duration with an explanatory note.
             t_end = ratio * tc_el
             res = run_impact(
-                law, mat, RADIUS, v0,
+                law,
+                mat,
+                RADIUS,
+                v0,
                 time_step=dt,
                 duration=t_sep * tc_el + 2.0 * tc_el,
                 record_windows=[(0.93 * t_end, 1.07 * t_end)],
@@ -155,9 +190,11 @@ def test_references_match_cases_tables(materials, hertz_pair):
         )
     for name, (dmax, fmax, tc) in TABLE_B3.items():
         pair = hertz_pair(materials[name], RADIUS)
-        for label, got, ref in (("delta_max", pair.max_overlap(V0), dmax),
-                                ("F_max", pair.max_force(V0), fmax),
-                                ("t_c", pair.contact_time(V0), tc)):
+        for label, got, ref in (
+            ("delta_max", pair.max_overlap(V0), dmax),
+            ("F_max", pair.max_force(V0), fmax),
+            ("t_c", pair.contact_time(V0), tc),
+        ):
             assert abs(got / ref - 1.0) <= 1e-3, f"B3 {name} {label}: {got:.6g} vs table {ref:.6g}"
 
 
@@ -219,7 +256,9 @@ def test_time_step_convergence(mat_name, limit_force, e_in, bounce):
 @pytest.mark.parametrize("mat_name", MATERIALS)
 def test_velocity_independence(mat_name, limit_force, e_in, bounce):
     e_ref = expected_restitution(e_in, limit_force)
-    got = {v0: bounce(mat_name, limit_force, e_in, v0=v0)[0].restitution for v0 in (0.39, 3.9, 39.0)}
+    got = {
+        v0: bounce(mat_name, limit_force, e_in, v0=v0)[0].restitution for v0 in (0.39, 3.9, 39.0)
+    }
     spread = max(got.values()) - min(got.values())
     text = ", ".join(f"v0={v0}: {e:.6f}" for v0, e in got.items())
     assert spread <= TOL_V_INDEPENDENCE, (

@@ -16,10 +16,9 @@ from __future__ import annotations
 
 import math
 
+import grainscale as gs
 import numpy as np
 import pytest
-
-import grainscale as gs
 
 RADIUS = 0.1
 V_N = 0.2  # speed of each sphere / of the sphere onto the plane, m/s
@@ -53,7 +52,10 @@ def spin_pair(materials, hertz_pair, run_impact):
             a = np.asarray(axis, float) / np.linalg.norm(axis)
             w = spin_of_test6(i) * a
             store[key] = run_impact(
-                _law(), mat, RADIUS, v0,
+                _law(),
+                mat,
+                RADIUS,
+                v0,
                 time_step=tc / STEPS_PER_CONTACT / refine,
                 duration=(TC_RATIO_E05 + 2.0) * tc,
                 other=(mat, RADIUS),
@@ -130,7 +132,10 @@ def spin_on_plane(materials, hertz_pair, run_impact):
             mat = materials["al_alloy"]
             tc = hertz_pair(mat, RADIUS).contact_time(V_N)
             store[i] = run_impact(
-                _law(), mat, RADIUS, V_N,
+                _law(),
+                mat,
+                RADIUS,
+                V_N,
                 time_step=tc / STEPS_PER_CONTACT,
                 duration=(TC_RATIO_E05 + 1.0) * tc,
                 angular_velocity=[(0.0, spin_of_test6(i), 0.0)],
@@ -193,4 +198,6 @@ def test_tangential_force_bounded_by_coulomb(i, spin_on_plane):
             f"i={i}: spin drop {dw:.6e} rad/s, expected mu J_n+ R / I = {dw_ref:.6e} rad/s"
         )
         # Friction acts against the slip of the contact point (-R w ex): +ex on the sphere.
-        assert res.velocity[-1, 0, 0] > 0, f"i={i}: sphere pushed the wrong way {res.velocity[-1, 0]}"
+        assert res.velocity[-1, 0, 0] > 0, (
+            f"i={i}: sphere pushed the wrong way {res.velocity[-1, 0]}"
+        )

@@ -174,7 +174,9 @@ def test_run_until_reaches_time_and_periodic_axes_wrap():
 
 
 def test_sphere_resting_on_plane_loads_the_wall_with_its_weight():
-    sim = small_sim(contact=gs.contact.HertzMindlin(restitution=0.3, friction=0.5))
+    sim = small_sim(
+        contact=gs.contact.HertzMindlin(restitution=0.3, friction=0.5), record_contacts=True
+    )
     floor = sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
     sim.add_particles(position=[[0.01, 0.01, 0.0012]], radius=1e-3, material=GLASS)
     sim.run(until=0.3)
@@ -206,11 +208,11 @@ def test_moving_wall_pushes_particles():
 def test_rectangle_edge_contact_uses_the_closest_point():
     sim = small_sim(gravity=(0, 0, 0), contact=gs.contact.HertzMindlin(restitution=1.0))
     # rectangle in z = 0.01 spanning x in [0.005, 0.01]; the sphere comes at its edge x = 0.01
-    sim.add_wall(
-        gs.Rectangle(corner=(0.005, 0.0, 0.01), edge1=(0.005, 0, 0), edge2=(0, 0.02, 0))
-    )
+    sim.add_wall(gs.Rectangle(corner=(0.005, 0.0, 0.01), edge1=(0.005, 0, 0), edge2=(0, 0.02, 0)))
     sim.add_particles(
-        position=[[0.0115, 0.01, 0.0115]], radius=1e-3, material=GLASS,
+        position=[[0.0115, 0.01, 0.0115]],
+        radius=1e-3,
+        material=GLASS,
         velocity=(-0.1, 0.0, -0.1),
     )
     sim.run(until=0.03)
@@ -286,3 +288,14 @@ def test_coincident_particles_do_not_produce_nan():
     with sim.particles() as p:
         assert np.isfinite(p.force).all()
         assert p.force[0, 2] != 0.0
+
+
+def test_contacts_need_recording_switched_on():
+    sim = small_sim()
+    sim.add_particles(position=[[0.01, 0.01, 0.01]], radius=1e-3, material=GLASS)
+    sim.run(steps=1)
+    with pytest.raises(RuntimeError, match="record_contacts=True"):
+        sim.contacts()
+    sim.record_contacts = True
+    sim.run(steps=1)
+    assert len(sim.contacts()["overlap"]) == 0

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import grainscale as gs
+import numpy as np
 
 BOX = 18e-3
 N = 300
@@ -42,6 +42,7 @@ def dense_gas(seed, n=N, gap=0.0):
 
 def make_sim(law, time_step):
     return gs.Simulation(
+        record_contacts=True,
         domain=gs.Box(lo=(0.0, 0.0, 0.0), hi=(BOX, BOX, BOX), periodic=(True, True, True)),
         contact=law,
         gravity=(0.0, 0.0, 0.0),
@@ -59,8 +60,13 @@ def rayleigh_time(radius):
 def state(sim):
     with sim.particles() as p:
         order = np.argsort(p.id)
-        return (np.array(p.id[order]), np.array(p.mass[order]), np.array(p.radius[order]),
-                np.array(p.velocity[order]), np.array(p.angular_velocity[order]))
+        return (
+            np.array(p.id[order]),
+            np.array(p.mass[order]),
+            np.array(p.radius[order]),
+            np.array(p.velocity[order]),
+            np.array(p.angular_velocity[order]),
+        )
 
 
 def test_linear_momentum_conserved():

@@ -11,10 +11,9 @@ other axes). Checks:
 
 from __future__ import annotations
 
+import grainscale as gs
 import numpy as np
 import pytest
-
-import grainscale as gs
 
 R_MIN, R_MAX = 0.5e-3, 1.5e-3
 BOX = 22e-3
@@ -64,18 +63,37 @@ def min_image(d, periodic, length):
     return d
 
 
-def pair_gaps(x, r, ids, periodic, length):
-    """All unordered pairs (id_small, id_large) -> gap = |x_i - x_j| - r_i - r_j."""
-    i, j = np.triu_indices(len(x), 1)
-    dist = np.linalg.norm(min_image(x[i] - x[j], periodic, length), axis=1)
-    gap = dist - r[i] - r[j]
-    a, b = ids[i], ids[j]
-    keys = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)
-    return keys, gap
+def gap_matrix(x, r, periodic, length=BOX):
+    """(N, N) matrix of |x_i - x_j| - r_i - r_j (minimum image on periodic axes)."""
+    d = min_image(x[:, None, :] - x[None, :, :], periodic, length)
+    return np.linalg.norm(d, axis=2) - r[:, None] - r[None, :]
 
 
-def as_set(keys):
-    return {(int(a), int(b)) for a, b in keys}
+def pair_mask(pairs, ids, where, what):
+    """Upper-triangular (N, N) mask of the id pairs; checks shape, dtype, self pairs, duplicates.
+
+    ``ids`` must be sorted; the mask is indexed by position in ``ids``.
+    """
+    n = len(ids)
+    pairs = np.asarray(pairs)
+    assert pairs.ndim == 2 and pairs.shape[1] == 2, f"{where}: {what} shape {pairs.shape}"
+    assert pairs.dtype == np.int64, f"{where}: {what} dtype {pairs.dtype}"
+    rows = np.searchsorted(ids, pairs)
+    rows_ok = np.clip(rows, 0, n - 1)
+    unknown = pairs[ids[rows_ok] != pairs]
+    assert unknown.size == 0, f"{where}: unknown ids in {what}: {unknown[:10]}"
+    n_self = int(np.sum(pairs[:, 0] == pairs[:, 1]))
+    assert n_self == 0, f"{where}: {n_self} self pairs in {what}"
+    lo, hi = np.minimum(rows[:, 0], rows[:, 1]), np.maximum(rows[:, 0], rows[:, 1])
+    counts = np.bincount(lo * n + hi, minlength=n * n)
+    n_dup = int(np.sum(counts > 1))
+    assert n_dup == 0, f"{where}: {n_dup} duplicate pairs in {what}"
+    return counts.reshape(n, n) > 0
+
+
+def examples(mask, ids, gap, k=5):
+    rows = np.argwhere(mask)[:k]
+    return [(int(ids[a]), int(ids[b]), float(f"{gap[a, b]:.3e}")) for a, b in rows]
 
 
 def add_walls(sim, periodic):
@@ -95,6 +113,7 @@ def add_walls(sim, periodic):
 
 def make_sim(periodic, skin):
     return gs.Simulation(
+        record_contacts=True,
         domain=gs.Box(lo=(0.0, 0.0, 0.0), hi=(BOX, BOX, BOX), periodic=periodic),
         contact=gs.contact.HertzMindlin(restitution=1.0, friction=0.3),
         gravity=(0.0, 0.0, 0.0),
@@ -107,19 +126,6 @@ def snapshot(sim):
     with sim.particles() as p:
         order = np.argsort(p.id)
         return (np.array(p.id[order]), np.array(p.position[order]), np.array(p.radius[order]))
-
-
-def check_pairs_array(pairs, ids, where):
-    assert pairs.ndim == 2 and pairs.shape[1] == 2, f"{where}: neighbor_pairs shape {pairs.shape}"
-    assert pairs.dtype == np.int64, f"{where}: neighbor_pairs dtype {pairs.dtype}"
-    self_pairs = int(np.sum(pairs[:, 0] == pairs[:, 1]))
-    assert self_pairs == 0, f"{where}: {self_pairs} self pairs in the neighbour list"
-    keys = np.sort(pairs, axis=1)
-    n_unique = len(np.unique(keys, axis=0)) if len(keys) else 0
-    assert n_unique == len(keys), f"{where}: {len(keys) - n_unique} duplicate pairs in the list"
-    unknown = np.setdiff1d(pairs.ravel(), ids)
-    assert unknown.size == 0, f"{where}: unknown ids in the neighbour list: {unknown[:10]}"
-    return as_set(keys)
 
 
 @pytest.mark.parametrize("skin", [None, 0.1e-3], ids=["default_skin", "skin_0.1mm"])
@@ -142,19 +148,19 @@ def test_list_equals_brute_force_at_build(geometry, skin):
             f"{geometry} {stage}: particles at rest without contacts moved by {moved:.3e} m"
         )
         where = f"{geometry} skin={s:.3e} {stage}"
-        listed = check_pairs_array(sim.neighbor_pairs(), ids, where)
-        keys, gap = pair_gaps(x1, rad, ids, periodic, BOX)
+        listed = pair_mask(sim.neighbor_pairs(), ids, where, "neighbor_pairs()")
+        gap = gap_matrix(x1, rad, periodic)
+        upper = np.triu(np.ones_like(listed), 1)
+        expected = upper & (gap < s)
         clear = np.abs(gap - s) > EPS
-        expected = as_set(keys[(gap < s) & clear])
-        listed_clear = listed - as_set(keys[~clear])
-        missing = sorted(expected - listed_clear)
-        extra = sorted(listed_clear - expected)
-        assert not missing and not extra, (
+        missing = expected & ~listed & clear
+        extra = listed & ~expected & clear
+        assert not missing.any() and not extra.any(), (
             f"{where}: list differs from brute force with cutoff r_i + r_j + skin: "
-            f"{len(missing)} missing (e.g. {missing[:5]}), {len(extra)} extra "
-            f"(e.g. {extra[:5]}); {len(expected)} expected"
+            f"{missing.sum()} missing (id, id, gap: {examples(missing, ids, gap)}), "
+            f"{extra.sum()} extra ({examples(extra, ids, gap)}); {expected.sum()} expected"
         )
-        assert len(expected) > len(x1), f"{where}: only {len(expected)} pairs, test too sparse"
+        assert expected.sum() >= 30, f"{where}: only {expected.sum()} pairs, test too sparse"
         if stage == "first build":
             # Insert a second batch; the list must be rebuilt to include the new particles.
             xn, rn = random_packing(rng, 60, periodic, existing=(x1, rad), gap=1e-6)
@@ -186,37 +192,35 @@ def test_list_and_contacts_through_rebuilds(geometry, skin):
         where = f"{geometry} skin={s:.3e} step {sim.step}"
         path += np.linalg.norm(min_image(xs - x_prev, periodic, BOX), axis=1)
         x_prev = xs
-        listed = check_pairs_array(sim.neighbor_pairs(), ids, where)
-        distinct_lists.add(frozenset(listed))
-        keys, gap = pair_gaps(xs, rad, ids, periodic, BOX)
-        gap_of = dict(zip(map(tuple, keys.tolist()), gap.tolist()))
+        listed = pair_mask(sim.neighbor_pairs(), ids, where, "neighbor_pairs()")
+        distinct_lists.add(np.packbits(listed).tobytes())
+        gap = gap_matrix(xs, rad, periodic)
+        upper = np.triu(np.ones_like(listed), 1)
 
-        overlapping = as_set(keys[gap < -EPS])
-        missing = sorted(overlapping - listed)
-        assert not missing, (
-            f"{where}: {len(missing)} overlapping pairs not in the neighbour list, e.g. "
-            f"{[(m, gap_of[m]) for m in missing[:5]]}"
+        overlapping = upper & (gap < -EPS)
+        missing = overlapping & ~listed
+        assert not missing.any(), (
+            f"{where}: {missing.sum()} overlapping pairs not in the neighbour list "
+            f"(id, id, gap): {examples(missing, ids, gap)}"
         )
-        too_far = sorted(p for p in listed if gap_of[p] >= 2.0 * s + EPS)
-        assert not too_far, (
-            f"{where}: {len(too_far)} listed pairs farther than r_i + r_j + 2 skin "
-            f"({2 * s:.3e} m), e.g. {[(p, gap_of[p]) for p in too_far[:5]]}"
+        too_far = listed & (gap >= 2.0 * s + EPS)
+        assert not too_far.any(), (
+            f"{where}: {too_far.sum()} listed pairs farther than r_i + r_j + 2 skin "
+            f"({2 * s:.3e} m): {examples(too_far, ids, gap)}"
         )
 
         c = sim.contacts()
-        is_wall = c["id_j"] < 0
-        got = np.stack([c["id_i"][~is_wall], c["id_j"][~is_wall]], axis=1)
-        got_keys = np.sort(got, axis=1) if len(got) else np.zeros((0, 2), np.int64)
-        got_set = as_set(got_keys)
-        assert len(got_set) == len(got_keys), f"{where}: duplicate contacts in sim.contacts()"
-        ambiguous = as_set(keys[np.abs(gap) <= EPS])
-        missing = sorted(overlapping - got_set)
-        extra = sorted(got_set - overlapping - ambiguous)
-        assert not missing and not extra, (
+        is_wall = np.asarray(c["id_j"]) < 0
+        got = np.stack([c["id_i"][~is_wall], c["id_j"][~is_wall]], axis=1).astype(np.int64)
+        got = pair_mask(got, ids, where, "contacts()")
+        ambiguous = np.abs(gap) <= EPS
+        missing = overlapping & ~got
+        extra = got & ~overlapping & ~ambiguous
+        assert not missing.any() and not extra.any(), (
             f"{where}: sim.contacts() vs brute-force overlaps: missing "
-            f"{[(m, gap_of[m]) for m in missing[:5]]}, extra {[(e, gap_of[e]) for e in extra[:5]]}"
+            f"{examples(missing, ids, gap)}, extra {examples(extra, ids, gap)}"
         )
-        n_overlaps_seen += len(overlapping)
+        n_overlaps_seen += int(overlapping.sum())
 
         # Wall contacts: plane at lo (normal +e_a) or hi (normal -e_a) on non-periodic axes.
         row = {int(k): n for n, k in enumerate(ids)}
@@ -224,14 +228,17 @@ def test_list_and_contacts_through_rebuilds(geometry, skin):
         for w, (axis, side) in walls.items():
             wgap = (xs[:, axis] if side == 0 else BOX - xs[:, axis]) - rad
             expected_wall |= {(int(ids[k]), -1 - w) for k in np.nonzero(wgap < -EPS)[0]}
-        got_wall = {(int(a), int(b)) for a, b in zip(c["id_i"][is_wall], c["id_j"][is_wall])}
-        for a, b in got_wall - expected_wall:
+        wall_i, wall_j = c["id_i"][is_wall], c["id_j"][is_wall]
+        got_wall = [(int(a), int(b)) for a, b in zip(wall_i, wall_j, strict=True)]
+        assert len(set(got_wall)) == len(got_wall), f"{where}: duplicate wall contacts"
+        for a, b in set(got_wall) - expected_wall:
+            assert -1 - b in walls, f"{where}: wall contact with unknown wall id_j = {b}"
             axis, side = walls[-1 - b]
             xa = xs[row[a], axis]
             wgap = (xa if side == 0 else BOX - xa) - rad[row[a]]
             assert abs(wgap) <= EPS, f"{where}: spurious wall contact {(a, b)} with gap {wgap:.3e}"
-        assert expected_wall <= got_wall, (
-            f"{where}: missing wall contacts {sorted(expected_wall - got_wall)[:5]}"
+        assert expected_wall <= set(got_wall), (
+            f"{where}: missing wall contacts {sorted(expected_wall - set(got_wall))[:5]}"
         )
         n_wall_contacts_seen += len(got_wall)
         assert sim.num_contacts() == len(c["id_i"]), (
