@@ -16,9 +16,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import grainscale as gs
 import numpy as np
 import pytest
+
+import grainscale as gs
 
 # Hertz duration integral I = int_0^1 dx / sqrt(1 - x^(5/2)) (CASES.md A1):
 # t_c = 2 I delta_max / v0.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -22,35 +23,46 @@ using grainscale::Index;
 using grainscale::Real;
 using grainscale::Vec3;
 
-// Keeps the optimiser from discarding a computed value.
-template <class T>
-inline void do_not_optimize(const T& value) {
-  asm volatile("" : : "r,m"(value) : "memory");
-}
-
 inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Runs setup() untimed, then body() timed, `reps` times; returns the median of body() in ns.
+// CPU time of the calling thread in ns (unaffected by time-sharing with other processes).
+inline double thread_cpu_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e9 * static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec);
+}
+
+// Median wall-clock (steady_clock) and thread-CPU time of a timed section, in ns.
+struct Timing {
+  double wall_ns;
+  double cpu_ns;
+};
+
+// Runs setup() untimed, then body() timed, `reps` times; returns the medians of body().
 // One untimed warm-up round runs first (page faults, caches, branch predictors).
 template <class Setup, class Body>
-double median_ns(int reps, Setup&& setup, Body&& body) {
+Timing median_ns(int reps, Setup&& setup, Body&& body) {
   using Clock = std::chrono::steady_clock;
   setup();
   body();
-  std::vector<double> t;
-  t.reserve(reps);
+  std::vector<double> wall, cpu;
+  wall.reserve(reps);
+  cpu.reserve(reps);
   for (int r = 0; r < reps; ++r) {
     setup();
+    const double c0 = thread_cpu_ns();
     const auto t0 = Clock::now();
     body();
     const auto t1 = Clock::now();
-    t.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+    const double c1 = thread_cpu_ns();
+    wall.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
+    cpu.push_back(c1 - c0);
   }
-  return median(t);
+  return {median(wall), median(cpu)};
 }
 
 // Scale factor for N from argv[1] (default 1); exits with a usage message on a bad value.
@@ -98,10 +110,9 @@ inline void fill_store(grainscale::ParticleStore& ps, const std::vector<Vec3>& x
   for (std::size_t k = 0; k < x.size(); ++k) {
     const Real r = radius[k];
     const Real m = rho * (4.0 / 3.0) * M_PI * r * r * r;
-    ps.add_owned(static_cast<grainscale::GlobalId>(k), x[k],
-                 velocity ? (*velocity)[k] : Vec3::Zero(),
-                 angular_velocity ? (*angular_velocity)[k] : Vec3::Zero(), r, m, 0.4 * m * r * r,
-                 0);
+    ps.add_owned(
+        static_cast<grainscale::GlobalId>(k), x[k], velocity ? (*velocity)[k] : Vec3::Zero(),
+        angular_velocity ? (*angular_velocity)[k] : Vec3::Zero(), r, m, 0.4 * m * r * r, 0);
   }
 }
 
@@ -120,11 +131,13 @@ inline Real max_radius(const grainscale::ParticleStore& ps) {
   return r;
 }
 
-// One result line: "name: value unit (N=..., reps=...[, extra])".
-inline void report(const std::string& name, double value, const char* unit, Index n, int reps,
-                   const std::string& extra = "") {
-  std::printf("%s: %.4g %s (N=%d, reps=%d%s%s)\n", name.c_str(), value, unit, n, reps,
-              extra.empty() ? "" : ", ", extra.c_str());
+// One result line: "name: value unit (N=..., reps=..., cpu=...[, extra])". `value` comes from
+// the wall clock; `cpu` is the same figure from the thread's CPU time, which shows how much of
+// the wall time other processes on a busy machine took.
+inline void report(const std::string& name, double value, double cpu, const char* unit, Index n,
+                   int reps, const std::string& extra = "") {
+  std::printf("%s: %.4g %s (N=%d, reps=%d, cpu=%.4g%s%s)\n", name.c_str(), value, unit, n, reps,
+              cpu, extra.empty() ? "" : ", ", extra.c_str());
   std::fflush(stdout);
 }
 

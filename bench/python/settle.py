@@ -340,6 +340,9 @@ def summarize(runs: list[RunResult]) -> dict[str, Any]:
             "ke_rot_final": statistics.median(r.ke_rot_final for r in mine),
             "mean_z_final": statistics.median(r.mean_z_final for r in mine),
         }
+        baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
+        if baseline:  # grainscale: interpreter, imports, initial state
+            summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
     by_round: dict[int, dict[str, RunResult]] = {}
     for r in runs:
         by_round.setdefault(r.round, {})[r.code] = r
@@ -381,6 +384,11 @@ def print_table(entry: dict[str, Any]) -> None:
             f"{c['min_ns_per_particle_step']:8.1f} {c['max_ns_per_particle_step']:8.1f} "
             f"{c['peak_rss_mib']:7.1f} MiB {c['ke_final']:13.6e} {c['ke_rot_final']:10.3e} "
             f"{c['mean_z_final'] * 1e3:12.5f}"
+        )
+    if "rss_before_sim_mib" in s.get("grainscale", {}):
+        print(
+            f"  (grainscale peak RSS includes {s['grainscale']['rss_before_sim_mib']:.1f} MiB of "
+            "Python, numpy, grainscale and the initial-state arrays before the Simulation is built)"
         )
     if "ratio_grainscale_over_liggghts" in s:
         r, x = s["ratio_grainscale_over_liggghts"], s["cross_check"]

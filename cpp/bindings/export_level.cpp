@@ -132,6 +132,7 @@ void export_level(py::module_& m) {
       .def_property_readonly("num_ghosts", [](Level& l) { return l.particles().n_ghost(); })
       .def_property_readonly("lost_particles", &Level::lost_particles)
       .def_property_readonly("rebuilds", &Level::rebuilds)
+      .def_property_readonly("rebuild_seconds", &Level::rebuild_seconds)
       .def("kinetic_energy", &Level::kinetic_energy)
       .def("smallest_rayleigh_time", &Level::smallest_rayleigh_time)
       .def("last_contact_count", [](Level& l) { return l.last_stats().contacts; })

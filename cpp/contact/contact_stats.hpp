@@ -20,7 +20,7 @@ struct ContactRecord {
 struct ContactStats {
   std::int64_t contacts = 0;
   Real max_overlap_ratio = 0;  // overlap / smaller radius of the pair
-  bool record = false;  // keep `records` (off by default: 72 bytes per contact)
+  bool record = false;         // keep `records` (off by default: 72 bytes per contact)
   std::vector<ContactRecord> records;
 
   void clear() {

@@ -50,7 +50,8 @@ class HertzMindlin {
   const Pair& pair(int mi, int mj) const { return pairs_[mi * stride_ + mj]; }
 
   // Force on body i; `history` points at kHistorySize values owned by this contact.
-  inline Vec3 force(const Pair& p, const ContactInput& c, Real* history) const;
+  [[gnu::always_inline]] inline Vec3 force(const Pair& p, const ContactInput& c,
+                                           Real* history) const;
 
  private:
   HertzMindlinSettings settings_;

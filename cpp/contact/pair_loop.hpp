@@ -44,7 +44,10 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       const Real rsum = ri + rj;
       const Real d2 = d.squaredNorm();
       if (d2 >= rsum * rsum) {
-        if constexpr (kUpdate) std::fill(h, h + S, Real(0));
+        if (kUpdate && list.touching[k]) {
+          std::fill(h, h + S, Real(0));
+          list.touching[k] = 0;
+        }
         continue;
       }
       const Real dist = std::sqrt(d2);
@@ -56,6 +59,7 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       const ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
       Vec3 F;
       if constexpr (kUpdate) {
+        list.touching[k] = 1;
         F = law.force(law.pair(mi, mat[j]), c, h);
       } else {
         std::array<Real, S> scratch;

@@ -29,7 +29,10 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Plane
       const WallContactGeometry g = wall.closest(xi);
       const Real overlap = ri - g.distance;
       if (overlap <= 0) {
-        if constexpr (kUpdate) std::fill(h, h + S, Real(0));
+        if (kUpdate && list.touching[k]) {
+          std::fill(h, h + S, Real(0));
+          list.touching[k] = 0;
+        }
         continue;
       }
       const Vec3& nrm = g.normal;
@@ -39,6 +42,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Plane
       const auto& pair = law.pair(ps.material[i], wall.law_material);
       Vec3 F;
       if constexpr (kUpdate) {
+        list.touching[k] = 1;
         F = law.force(pair, c, h);
       } else {
         std::array<Real, S> scratch;
@@ -55,7 +59,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Plane
         stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / ri);
         if (stats.record)
           stats.records.push_back(
-            {ps.id[i], -1 - static_cast<GlobalId>(list.partner[k]), overlap, nrm, F});
+              {ps.id[i], -1 - static_cast<GlobalId>(list.partner[k]), overlap, nrm, F});
       }
     }
   }

@@ -22,7 +22,8 @@ class SharedArray {
 
   void reserve(std::size_t n) {
     if (n <= capacity_) return;
-    std::size_t cap = std::max<std::size_t>(n, capacity_ + capacity_ / 2 + 16);
+    // Exact for an explicit reserve beyond the growth step; geometric growth otherwise.
+    std::size_t cap = n > capacity_ + capacity_ / 2 ? n : capacity_ + capacity_ / 2 + 16;
     std::shared_ptr<T[]> grown(new T[cap]);
     std::copy(buffer_.get(), buffer_.get() + size_, grown.get());
     buffer_ = std::move(grown);

@@ -1,6 +1,7 @@
 #include "level/level.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -90,6 +91,7 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
   lists_valid_ = false;
   forces_valid_ = false;
   ps_.clear_ghosts();
+  ps_.reserve(ps_.n_owned() + n);
   const GlobalId first = next_id_;
   for (Index k = 0; k < n; ++k) {
     const Real r = radius[k];
@@ -212,6 +214,7 @@ void Level::save_histories() {
 }
 
 void Level::rebuild() {
+  const auto started = std::chrono::steady_clock::now();
   for (Index i = 0; i < ps_.n_owned(); ++i)
     if (!ps_.position[i].allFinite() || !ps_.velocity[i].allFinite()) {
       std::ostringstream msg;
@@ -262,6 +265,8 @@ void Level::rebuild() {
   for (const PlaneWall& w : walls_) wall_point_at_build_.push_back(w.point);
   lists_valid_ = true;
   ++rebuilds_;
+  rebuild_seconds_ +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 }
 
 template <class Law, bool kUpdate, bool kStats>

@@ -59,6 +59,8 @@ class Level {
   Real time() const { return time_; }
   std::int64_t lost_particles() const { return lost_; }
   std::int64_t rebuilds() const { return rebuilds_; }
+  // Wall-clock seconds spent in neighbour-list rebuilds (sorting, ghosts, lists, histories).
+  double rebuild_seconds() const { return rebuild_seconds_; }
   const ContactStats& last_stats() const { return stats_; }
   // Keep a record of every touching contact at the last step of each run() (diagnostics).
   void set_record_contacts(bool on) { stats_.record = on; }
@@ -105,6 +107,7 @@ class Level {
   std::int64_t step_at_dt_change_ = 0;
   std::int64_t lost_ = 0;
   std::int64_t rebuilds_ = 0;
+  double rebuild_seconds_ = 0;
   bool lists_valid_ = false;
   bool forces_valid_ = false;
   bool law_prepared_ = false;

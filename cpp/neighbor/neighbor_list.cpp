@@ -1,5 +1,7 @@
 #include "neighbor/neighbor_list.hpp"
 
+#include <algorithm>
+
 namespace grainscale {
 
 void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list) {
@@ -15,28 +17,25 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, C
     const Vec3 xi = x[i];
     const Real ri = r[i];
     const GlobalId idi = id[i];
-    for (int dz = -1; dz <= 1; ++dz) {
-      const int cz = c[2] + dz;
-      if (cz < 0 || cz >= grid.dims[2]) continue;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int cy = c[1] + dy;
-        if (cy < 0 || cy >= grid.dims[1]) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int cx = c[0] + dx;
-          if (cx < 0 || cx >= grid.dims[0]) continue;
-          const int cell = grid.cell_id(cx, cy, cz);
-          for (Index k = grid.cell_start[cell]; k < grid.cell_start[cell + 1]; ++k) {
-            const Index j = grid.particles[k];
-            if (id[j] <= idi) continue;
-            const Real cut = ri + r[j] + skin;
-            if ((xi - x[j]).squaredNorm() < cut * cut) list.partner.push_back(j);
-          }
+    // Cells adjacent along x are adjacent in `grid.particles`, so each (dy, dz) row of the
+    // 3x3x3 stencil is one contiguous range of candidates.
+    const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, grid.dims[0] - 1);
+    for (int cz = std::max(c[2] - 1, 0); cz <= std::min(c[2] + 1, grid.dims[2] - 1); ++cz) {
+      for (int cy = std::max(c[1] - 1, 0); cy <= std::min(c[1] + 1, grid.dims[1] - 1); ++cy) {
+        const Index begin = grid.cell_start[grid.cell_id(x0, cy, cz)];
+        const Index end = grid.cell_start[grid.cell_id(x1, cy, cz) + 1];
+        for (Index k = begin; k < end; ++k) {
+          const Index j = grid.particles[k];
+          if (id[j] <= idi) continue;
+          const Real cut = ri + r[j] + skin;
+          if ((xi - x[j]).squaredNorm() < cut * cut) list.partner.push_back(j);
         }
       }
     }
   }
   list.first[n] = static_cast<Index>(list.partner.size());
   list.history.assign(list.partner.size() * list.history_stride, 0.0);
+  list.touching.assign(list.partner.size(), 0);
 }
 
 void build_wall_list(const ParticleStore& ps, const std::vector<PlaneWall>& walls, Real skin,
@@ -52,6 +51,7 @@ void build_wall_list(const ParticleStore& ps, const std::vector<PlaneWall>& wall
   }
   list.first[n] = static_cast<Index>(list.partner.size());
   list.history.assign(list.partner.size() * list.history_stride, 0.0);
+  list.touching.assign(list.partner.size(), 0);
 }
 
 }  // namespace grainscale

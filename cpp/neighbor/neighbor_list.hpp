@@ -8,6 +8,7 @@
 // WallList: per owned particle, the walls within r_i + skin.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/types.hpp"
@@ -21,6 +22,9 @@ struct ContactList {
   std::vector<Index> first;    // n_owned + 1
   std::vector<Index> partner;  // local particle index, or wall index
   std::vector<Real> history;   // history_stride values per entry
+  // 1 while the entry touches (its history may be non-zero). Lets the force loop skip the
+  // history of the many non-touching entries instead of clearing it every step.
+  std::vector<std::uint8_t> touching;
   int history_stride = 0;
 
   std::size_t size() const { return partner.size(); }

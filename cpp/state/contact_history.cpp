@@ -14,7 +14,7 @@ void HistoryCarry::save(const ContactList& list, const std::vector<GlobalId>& pa
     first_[i] = static_cast<Index>(keys_.size());
     for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
       const Real* h = list.history.data() + static_cast<std::size_t>(k) * stride_;
-      if (std::all_of(h, h + stride_, [](Real v) { return v == 0; })) continue;
+      if (!list.touching[k]) continue;
       keys_.push_back(partner_key[k]);
       values_.insert(values_.end(), h, h + stride_);
     }
@@ -37,6 +37,7 @@ void HistoryCarry::restore(const std::vector<Index>& origin,
         std::copy(values_.begin() + static_cast<std::size_t>(s) * stride_,
                   values_.begin() + static_cast<std::size_t>(s + 1) * stride_,
                   list.history.begin() + static_cast<std::size_t>(k) * stride_);
+        list.touching[k] = 1;
         break;
       }
     }

@@ -1,7 +1,7 @@
 // ContactHistory carry: keeps the per-contact history of a ContactList across a rebuild.
 // Entries are keyed by (owner particle, partner key); the partner key is the partner's global
-// id for particle pairs and the wall index for wall contacts. Only non-zero histories (contacts
-// that touch) are carried; everything else starts from zero, as a new contact does.
+// id for particle pairs and the wall index for wall contacts. Only touching entries are carried;
+// everything else starts from zero, as a new contact does.
 #pragma once
 
 #include <vector>

@@ -19,6 +19,20 @@ void ParticleStore::resize_all(Index n) {
   n_local_ = n;
 }
 
+void ParticleStore::reserve(Index n) {
+  position.reserve(n);
+  velocity.reserve(n);
+  angular_velocity.reserve(n);
+  force.reserve(n);
+  torque.reserve(n);
+  radius.reserve(n);
+  mass.reserve(n);
+  inv_mass.reserve(n);
+  inv_inertia.reserve(n);
+  material.reserve(n);
+  id.reserve(n);
+}
+
 void ParticleStore::add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const Vec3& w, Real r,
                               Real m, Real inertia, std::int32_t mat) {
   if (n_local_ != n_owned_) throw std::logic_error("ParticleStore::add_owned with ghosts present");

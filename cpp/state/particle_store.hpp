@@ -27,6 +27,8 @@ class ParticleStore {
   Index n_ghost() const { return n_local_ - n_owned_; }
   Index n_local() const { return n_local_; }
 
+  // Makes room for n local particles in every array (one allocation instead of growth steps).
+  void reserve(Index n);
   // Appends one owned particle (ghosts must have been cleared).
   void add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const Vec3& w, Real r, Real m,
                  Real inertia, std::int32_t mat);

@@ -40,7 +40,9 @@ class HertzMindlin:
         object.__setattr__(
             self, "restitution", in_range("HertzMindlin", "restitution", self.restitution, 0, 1)
         )
-        object.__setattr__(self, "friction", non_negative("HertzMindlin", "friction", self.friction))
+        object.__setattr__(
+            self, "friction", non_negative("HertzMindlin", "friction", self.friction)
+        )
         if self.tangential_history not in ("total", "incremental"):
             raise ValueError(
                 "HertzMindlin.tangential_history must be 'total' or 'incremental', "

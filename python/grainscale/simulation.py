@@ -308,9 +308,7 @@ class Simulation:
             yield view
         finally:
             view._close()
-            if before is not None:
-                if self.num_particles != len(before["position"]):
-                    return
+            if before is not None and self.num_particles == len(before["position"]):
                 if not np.array_equal(before["position"], self._level.view("position")):
                     self._level.mark_positions_changed()
                 elif not (
@@ -405,7 +403,9 @@ class Simulation:
         dt = float(self._time_step)  # type: ignore[arg-type]
         if steps is not None:
             if int(steps) != steps or steps < 0:
-                raise ValueError(f"Simulation.run.steps must be a non-negative integer, got {steps!r}")
+                raise ValueError(
+                    f"Simulation.run.steps must be a non-negative integer, got {steps!r}"
+                )
             target = self.step + int(steps)
         else:
             u = float(until)  # type: ignore[arg-type]
@@ -443,7 +443,7 @@ class Simulation:
                     bar.update(n)
                 self._write_due_outputs(dt)
                 if self.thermo_every and self.step % self.thermo_every == 0:
-                    self._log_thermo(print_line=not self.quiet)
+                    self._log_thermo(print_line=not self.quiet, bar=bar)
         finally:
             if bar is not None:
                 bar.close()
@@ -459,20 +459,21 @@ class Simulation:
             updated.append((writer, due))
         self._outputs = updated
 
-    def _log_thermo(self, print_line: bool) -> None:
+    def _log_thermo(self, print_line: bool, bar: Any = None) -> None:
         entry = self.thermo()
         self._rate_clock = (_time.perf_counter(), self.step)
         self.thermo_log.append(entry)
         if print_line:
+            # Lines go through the progress bar when one is shown, so they do not tear it.
+            write = bar.write if bar is not None else (lambda s: print(s, flush=True))
             if not self._header_printed:
-                print(
+                write(
                     f"{'step':>10} {'time':>11} {'kinetic_energy':>15} {'contacts':>9} "
                     f"{'max_overlap/r':>13} {'particle_steps/s':>16}"
                 )
                 self._header_printed = True
-            print(
+            write(
                 f"{entry['step']:>10d} {entry['time']:>11.5g} {entry['kinetic_energy']:>15.6g} "
                 f"{entry['contacts']:>9d} {entry['max_overlap_ratio']:>13.4g} "
-                f"{entry['particle_steps_per_second']:>16.4g}",
-                flush=True,
+                f"{entry['particle_steps_per_second']:>16.4g}"
             )

@@ -15,8 +15,9 @@ def rayleigh_time(material: Material, radius: float) -> float:
         >>> f"{rayleigh_time(glass, 1e-3):.3e}"
         '1.212e-05'
     """
-    return _core.rayleigh_time(radius, material.density, material.youngs_modulus,
-                               material.poisson_ratio)
+    return _core.rayleigh_time(
+        radius, material.density, material.youngs_modulus, material.poisson_ratio
+    )
 
 
 def hertz_contact_time(

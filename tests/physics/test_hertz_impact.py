@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import math
 
-import grainscale as gs
 import numpy as np
 import pytest
+
+import grainscale as gs
 
 STEPS_PER_CONTACT = 500  # dt = t_c / 500 (CASES.md section 0 asks for dt <= t_c / 200)
 

@@ -15,10 +15,11 @@ from __future__ import annotations
 import math
 from functools import cache
 
-import grainscale as gs
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+
+import grainscale as gs
 
 RADIUS = 2.5e-3
 V0 = 3.9

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import math
 
-import grainscale as gs
 import numpy as np
 import pytest
+
+import grainscale as gs
 
 RADIUS = 0.1
 V_N = 0.2  # speed of each sphere / of the sphere onto the plane, m/s

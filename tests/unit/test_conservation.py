@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import math
 
-import grainscale as gs
 import numpy as np
+
+import grainscale as gs
 
 BOX = 18e-3
 N = 300

@@ -11,9 +11,10 @@ other axes). Checks:
 
 from __future__ import annotations
 
-import grainscale as gs
 import numpy as np
 import pytest
+
+import grainscale as gs
 
 R_MIN, R_MAX = 0.5e-3, 1.5e-3
 BOX = 22e-3

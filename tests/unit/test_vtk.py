@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from grainscale.io import VTK, PVDSeries, write_vtp, write_vtp_mesh
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,93 @@
+"""The ``grainscale`` command.
+
+    grainscale demo [--output DIR] [--particles N] [--duration S] [--seed K] [--quick]
+    grainscale info
+
+``demo`` runs :mod:`grainscale.examples.pour_and_settle` with the same options; ``info`` prints
+the version and how the C++ core was built.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import sys
+from collections.abc import Sequence
+
+# Names under which the core may report an MPI build (a bool or a function returning one).
+_MPI_FLAGS = ("with_mpi", "has_mpi", "mpi_enabled", "built_with_mpi")
+
+
+def mpi_build() -> bool | None:
+    """True/False if the C++ core says whether it was built with MPI, None if it does not say."""
+    from . import _core
+
+    for name in _MPI_FLAGS:
+        flag = getattr(_core, name, None)
+        if flag is not None:
+            return bool(flag() if callable(flag) else flag)
+    return None
+
+
+def info_lines() -> list[str]:
+    """What ``grainscale info`` prints, one entry per line."""
+    import numpy as np
+
+    from . import __version__, _core
+
+    mpi = mpi_build()
+    return [
+        f"grainscale {__version__}",
+        f"core: {_core.__file__}",
+        f"parallel: {'built with MPI' if mpi else 'serial build'}",
+        f"python {platform.python_version()}, numpy {np.__version__}, {platform.platform()}",
+    ]
+
+
+def _info(args: argparse.Namespace) -> int:
+    print("\n".join(info_lines()))
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from .examples import pour_and_settle
+
+    try:
+        pour_and_settle.run_from_args(args)
+    except ValueError as err:
+        print(f"grainscale demo: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+    from .examples import pour_and_settle
+
+    parser = argparse.ArgumentParser(
+        prog="grainscale", description="grainscale: discrete element method for granular media."
+    )
+    parser.add_argument("--version", action="version", version=f"grainscale {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="command")
+    sub.required = True
+    demo = sub.add_parser(
+        "demo",
+        help="pour glass beads into a box and let them settle (VTK, PNG plot, summary)",
+        description="Pour glass beads into a closed box and let them settle. Writes ParaView "
+        "files (particles.pvd), a PNG plot and summary.md into the output directory.",
+    )
+    pour_and_settle.add_arguments(demo)
+    demo.set_defaults(func=_demo)
+    info = sub.add_parser("info", help="version and build configuration")
+    info.set_defaults(func=_info)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``grainscale`` console script; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    return int(args.func(args))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
