@@ -41,6 +41,23 @@ const Real* optional_rows(const py::object& o, Index n, const char* name, Array3
 }  // namespace
 
 void export_level(py::module_& m) {
+  py::class_<Interaction>(m, "Interaction")
+      .def(py::init<>())
+      .def_readwrite("restitution", &Interaction::restitution)
+      .def_readwrite("friction", &Interaction::friction)
+      .def_readwrite("rolling_friction", &Interaction::rolling_friction)
+      .def_readwrite("rolling_damping", &Interaction::rolling_damping)
+      .def_readwrite("normal_stiffness", &Interaction::normal_stiffness)
+      .def_readwrite("tangential_stiffness", &Interaction::tangential_stiffness)
+      .def_readwrite("characteristic_velocity", &Interaction::characteristic_velocity)
+      .def_readwrite("eepa_exponent", &Interaction::eepa_exponent)
+      .def_readwrite("loading_stiffness", &Interaction::loading_stiffness)
+      .def_readwrite("unloading_ratio", &Interaction::unloading_ratio)
+      .def_readwrite("adhesive_stiffness", &Interaction::adhesive_stiffness)
+      .def_readwrite("pull_off_force", &Interaction::pull_off_force)
+      .def_readwrite("adhesion_exponent", &Interaction::adhesion_exponent);
+  m.def("supported_contact_laws", &supported_contact_laws);
+
   py::class_<Level>(m, "Level")
       .def(py::init(
                [](std::array<Real, 3> lo, std::array<Real, 3> hi, std::array<bool, 3> periodic) {
@@ -52,19 +69,21 @@ void export_level(py::module_& m) {
           [](Level& l, Real density, Real E, Real nu) { return l.add_material({density, E, nu}); },
           py::arg("density"), py::arg("youngs_modulus"), py::arg("poisson_ratio"))
       .def(
-          "set_hertz_mindlin",
-          [](Level& l, Real e, Real mu, bool limit_force, bool tangential_damping,
-             bool incremental) {
-            HertzMindlinSettings s;
-            s.restitution = e;
-            s.friction = mu;
+          "set_contact_law",
+          [](Level& l, const std::string& normal, const std::string& rolling, bool limit_force,
+             bool tangential_damping, bool incremental) {
+            ContactSettings s;
             s.limit_force = limit_force;
             s.tangential_damping = tangential_damping;
             s.history = incremental ? TangentialHistory::Incremental : TangentialHistory::Total;
-            l.set_contact_law(HertzMindlin(s));
+            l.set_contact_law(make_contact_law(normal, rolling, s));
           },
-          py::arg("restitution"), py::arg("friction"), py::arg("limit_force"),
+          py::arg("normal"), py::arg("rolling"), py::arg("limit_force"),
           py::arg("tangential_damping"), py::arg("incremental"))
+      .def("contact_law_name", [](Level& l) { return law_name(l.contact_law()); })
+      .def("set_interaction", &Level::set_interaction, py::arg("i"), py::arg("j"),
+           py::arg("interaction"))
+      .def("set_default_interaction", &Level::set_default_interaction, py::arg("interaction"))
       .def("set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); })
       .def("set_time_step", &Level::set_time_step, py::arg("time_step"), py::arg("force"))
       .def("set_skin", &Level::set_skin)

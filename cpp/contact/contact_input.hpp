@@ -15,6 +15,16 @@ struct ContactInput {
   Real m_eff;    // m* = m_i m_j / (m_i + m_j)
   Vec3 v_rel;
   Real dt;
+  // Filled only for laws with a rolling model (Law::kRolling):
+  Vec3 w_rel = Vec3::Zero();  // omega_i - omega_j
+  Real rolling_inertia = 0;   // I_r = [1/(I_i + m_i r_i^2) + 1/(I_j + m_j r_j^2)]^-1
+};
+
+// What a law returns: the force on i (j gets -force) and the rolling-resistance torque on i
+// (j gets -torque); the torque of the tangential force about the centres is added by the loops.
+struct ContactOutput {
+  Vec3 force;
+  Vec3 rolling_torque;
 };
 
 // Damping ratio factor beta = ln e / sqrt(ln^2 e + pi^2) (< 0), with beta(0) = -1.

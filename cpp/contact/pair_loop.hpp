@@ -24,6 +24,7 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
   const Vec3* w = ps.angular_velocity.data();
   const Real* r = ps.radius.data();
   const Real* im = ps.inv_mass.data();
+  const Real* ii = ps.inv_inertia.data();
   const std::int32_t* mat = ps.material.data();
   Vec3* f = ps.force.data();
   Vec3* t = ps.torque.data();
@@ -56,21 +57,31 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       const Vec3 nrm = dist > 0 ? Vec3(d / dist) : Vec3(Vec3::UnitZ());
       const Real ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
       const Vec3 vrel = vi - v[j] - (ai * wi + aj * w[j]).cross(nrm);
-      const ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
-      Vec3 F;
+      ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
+      if constexpr (Law::kRolling) {
+        c.w_rel = wi - w[j];
+        c.rolling_inertia =
+            1 / (1 / (1 / ii[i] + ri * ri / imi) + 1 / (1 / ii[j] + rj * rj / im[j]));
+      }
+      ContactOutput out;
       if constexpr (kUpdate) {
         list.touching[k] = 1;
-        F = law.force(law.pair(mi, mat[j]), c, h);
+        out = law.force(law.pair(mi, mat[j]), c, h);
       } else {
         std::array<Real, S> scratch;
         std::copy(h, h + S, scratch.begin());
-        F = law.force(law.pair(mi, mat[j]), c, scratch.data());
+        out = law.force(law.pair(mi, mat[j]), c, scratch.data());
       }
+      const Vec3& F = out.force;
       const Vec3 nxf = nrm.cross(F);
       fi += F;
       ti -= ai * nxf;
       f[j] -= F;
       t[j] -= aj * nxf;
+      if constexpr (Law::kRolling) {
+        ti += out.rolling_torque;
+        t[j] -= out.rolling_torque;
+      }
       if constexpr (kStats) {
         ++stats.contacts;
         stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / std::min(ri, rj));

@@ -38,19 +38,28 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Plane
       const Vec3& nrm = g.normal;
       const Real ai = ri - 0.5 * overlap;
       const Vec3 vrel = ps.velocity[i] - ai * ps.angular_velocity[i].cross(nrm) - wall.velocity;
-      const ContactInput c{nrm, overlap, ri, ps.mass[i], vrel, dt};
+      ContactInput c{nrm, overlap, ri, ps.mass[i], vrel, dt};
+      if constexpr (Law::kRolling) {
+        c.w_rel = ps.angular_velocity[i];  // walls do not spin (yet)
+        c.rolling_inertia = 1 / ps.inv_inertia[i] + ps.mass[i] * ri * ri;
+      }
       const auto& pair = law.pair(ps.material[i], wall.law_material);
-      Vec3 F;
+      ContactOutput out;
       if constexpr (kUpdate) {
         list.touching[k] = 1;
-        F = law.force(pair, c, h);
+        out = law.force(pair, c, h);
       } else {
         std::array<Real, S> scratch;
         std::copy(h, h + S, scratch.begin());
-        F = law.force(pair, c, scratch.data());
+        out = law.force(pair, c, scratch.data());
       }
+      const Vec3& F = out.force;
       ps.force[i] += F;
       ps.torque[i] -= ai * nrm.cross(F);
+      if constexpr (Law::kRolling) {
+        ps.torque[i] += out.rolling_torque;
+        wall.torque -= out.rolling_torque;
+      }
       const Vec3 contact_point = xi - g.distance * nrm;
       wall.force -= F;
       wall.torque -= (contact_point - wall.point).cross(F);

@@ -13,7 +13,71 @@
 
 namespace grainscale {
 
-Level::Level(const Domain& domain) : domain_(domain), law_(HertzMindlin(HertzMindlinSettings{})) {}
+Level::Level(const Domain& domain)
+    : domain_(domain), law_(make_contact_law("hertz", "none", ContactSettings{})) {}
+
+namespace {
+
+void validate(const Interaction& in) {
+  if (!(in.restitution >= 0 && in.restitution <= 1))
+    throw_invalid("restitution", "in [0, 1]", in.restitution);
+  if (!(in.friction >= 0) || !std::isfinite(in.friction))
+    throw_invalid("friction", "non-negative and finite", in.friction);
+  if (!(in.rolling_friction >= 0) || !std::isfinite(in.rolling_friction))
+    throw_invalid("rolling_friction", "non-negative and finite", in.rolling_friction);
+  if (!(in.rolling_damping >= 0) || !std::isfinite(in.rolling_damping))
+    throw_invalid("rolling_damping", "non-negative and finite", in.rolling_damping);
+  if (!(in.normal_stiffness >= 0) || !std::isfinite(in.normal_stiffness))
+    throw_invalid("normal_stiffness", "non-negative (N/m; 0 derives it)", in.normal_stiffness);
+  if (!(in.tangential_stiffness >= 0) || !std::isfinite(in.tangential_stiffness))
+    throw_invalid("tangential_stiffness", "non-negative (N/m; 0 means 2/7 k_n)",
+                  in.tangential_stiffness);
+  if (!(in.characteristic_velocity > 0) || !std::isfinite(in.characteristic_velocity))
+    throw_invalid("characteristic_velocity", "positive (m/s)", in.characteristic_velocity);
+  if (!(in.eepa_exponent == 1 || in.eepa_exponent == 1.5))
+    throw_invalid("exponent", "1 or 1.5", in.eepa_exponent);
+  if (!(in.loading_stiffness >= 0) || !std::isfinite(in.loading_stiffness))
+    throw_invalid("loading_stiffness", "non-negative (0 derives it)", in.loading_stiffness);
+  if (!(in.unloading_ratio >= 1) || !std::isfinite(in.unloading_ratio))
+    throw_invalid("unloading_ratio", ">= 1 (k2/k1)", in.unloading_ratio);
+  if (!(in.adhesive_stiffness >= 0) || !std::isfinite(in.adhesive_stiffness))
+    throw_invalid("adhesive_stiffness", "non-negative", in.adhesive_stiffness);
+  if (!std::isfinite(in.pull_off_force))
+    throw_invalid("pull_off_force", "finite (N)", in.pull_off_force);
+  if (!(in.adhesion_exponent > 0) || !std::isfinite(in.adhesion_exponent))
+    throw_invalid("adhesion_exponent", "positive", in.adhesion_exponent);
+}
+
+}  // namespace
+
+void Level::set_interaction(int i, int j, const Interaction& interaction) {
+  for (int k : {i, j})
+    if (k < -1 || k >= materials_.n_materials())
+      throw_invalid("interaction material index", "-1 (rigid wall) or a known material", k);
+  validate(interaction);
+  interactions_[{std::min(i, j), std::max(i, j)}] = interaction;
+  law_prepared_ = false;
+  forces_valid_ = false;
+}
+
+void Level::set_default_interaction(const Interaction& interaction) {
+  validate(interaction);
+  default_interaction_ = interaction;
+  law_prepared_ = false;
+  forces_valid_ = false;
+}
+
+std::vector<Interaction> Level::interaction_table() const {
+  const int stride = materials_.n_materials() + 1;
+  std::vector<Interaction> table(static_cast<std::size_t>(stride) * stride, default_interaction_);
+  auto index = [&](int k) { return k < 0 ? materials_.rigid_index() : k; };
+  for (const auto& [key, in] : interactions_) {
+    const int a = index(key.first), b = index(key.second);
+    table[a * stride + b] = in;
+    table[b * stride + a] = in;
+  }
+  return table;
+}
 
 int Level::add_material(const MaterialProperties& props) {
   const int index = materials_.add(props);
@@ -164,7 +228,8 @@ std::vector<std::array<GlobalId, 2>> Level::neighbor_pairs() const {
 
 void Level::prepare() {
   if (!law_prepared_) {
-    std::visit([&](auto& law) { law.prepare(materials_); }, law_);
+    const std::vector<Interaction> table = interaction_table();
+    std::visit([&](auto& law) { law.prepare(materials_, table); }, law_);
     for (PlaneWall& w : walls_)
       w.law_material = w.material < 0 ? materials_.rigid_index() : w.material;
     const int stride = history_size(law_);

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <vector>
 
 #include "contact/contact_law.hpp"
@@ -30,6 +31,10 @@ class Level {
   const MaterialTable& materials() const { return materials_; }
   void set_contact_law(const ContactLaw& law);
   const ContactLaw& contact_law() const { return law_; }
+  // Interaction properties of the pair of materials i, j (symmetric; index -1 = rigid wall).
+  // Pairs never set use the default interaction.
+  void set_interaction(int i, int j, const Interaction& interaction);
+  void set_default_interaction(const Interaction& interaction);
   void set_gravity(const Vec3& g);
   const Vec3& gravity() const { return gravity_; }
   void set_time_step(Real dt, bool force);
@@ -77,12 +82,15 @@ class Level {
   void compute_forces(const Law& law);
   void prepare();
   void validate_periodic_lengths() const;
+  std::vector<Interaction> interaction_table() const;
   void save_histories();
   void rebuild();
 
   Domain domain_;
   MaterialTable materials_;
   ContactLaw law_;
+  Interaction default_interaction_;
+  std::map<std::pair<int, int>, Interaction> interactions_;
   Vec3 gravity_ = Vec3::Zero();
   Real dt_ = 0;
   bool force_dt_ = false;

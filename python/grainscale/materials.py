@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._validate import in_range, positive
+from ._validate import in_range, non_negative, positive
 
 
 @dataclass(frozen=True)
@@ -16,6 +16,9 @@ class Material:
         youngs_modulus: Young's modulus E in Pa.
         poisson_ratio: Poisson's ratio nu, in [0, 0.5).
         name: label used in output and messages.
+        restitution, friction, rolling_friction, rolling_damping: optional per-material
+            interaction values; a pair of materials uses their mean (see grainscale.contact for
+            the mixing rules). None leaves the value to the contact law.
 
     Example:
         >>> glass = Material(density=2500, youngs_modulus=5e7, poisson_ratio=0.3)
@@ -27,6 +30,10 @@ class Material:
     youngs_modulus: float
     poisson_ratio: float
     name: str = "material"
+    restitution: float | None = None
+    friction: float | None = None
+    rolling_friction: float | None = None
+    rolling_damping: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "density", positive("Material", "density", self.density))
@@ -38,6 +45,11 @@ class Material:
             "poisson_ratio",
             in_range("Material", "poisson_ratio", self.poisson_ratio, 0.0, 0.5, closed_hi=False),
         )
+        if self.restitution is not None:
+            in_range("Material", "restitution", self.restitution, 0.0, 1.0)
+        for name in ("friction", "rolling_friction", "rolling_damping"):
+            if getattr(self, name) is not None:
+                non_negative("Material", name, getattr(self, name))
 
     @property
     def shear_modulus(self) -> float:

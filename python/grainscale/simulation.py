@@ -18,7 +18,7 @@ import numpy as np
 
 from . import _core
 from ._validate import positive, vector3
-from .contact import ContactLaw, HertzMindlin
+from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .geometry import Box, Plane, Rectangle
 from .materials import Material
 
@@ -127,11 +127,13 @@ class Simulation:
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic)
         self._materials: list[Material] = []
         self.contact: ContactLaw = contact if contact is not None else HertzMindlin()
-        if not isinstance(self.contact, HertzMindlin):
+        if not isinstance(self.contact, HertzMindlin | Linear | EEPA):
             raise ValueError(
-                f"Simulation.contact must be a grainscale.contact law, got {self.contact!r}"
+                "Simulation.contact must be a grainscale.contact law (HertzMindlin, Linear, "
+                f"EEPA), got {self.contact!r}"
             )
-        self.contact._apply(self._level)
+        self.contact._apply_law(self._level)
+        self._interactions_for = -1  # number of materials the interaction table was built for
         self._level.set_gravity(vector3("Simulation", "gravity", gravity))
         self._force_time_step = bool(force_time_step)
         self._time_step: float | None = None
@@ -369,7 +371,21 @@ class Simulation:
         }
 
     # ----------------------------------------------------------------- running
+    def _push_interactions(self) -> None:
+        """Resolve the interaction properties of every material pair (mixing rules)."""
+        if self._interactions_for == len(self._materials):
+            return
+        bodies: list[tuple[int, Material | None]] = [(-1, None)]
+        bodies += list(enumerate(self._materials))
+        for a, (i, mi) in enumerate(bodies):
+            for j, mj in bodies[a:]:
+                if i == -1 and j == -1:
+                    continue
+                self.contact._apply_pair(self._level, _core, i, j, self.contact.interaction(mi, mj))
+        self._interactions_for = len(self._materials)
+
     def _resolve_defaults(self) -> None:
+        self._push_interactions()
         if not self._skin_fixed and self.num_particles > 0:
             with self.particles(writable=False) as p:
                 d_max = 2.0 * float(p.radius.max())

@@ -1,0 +1,129 @@
+// Normal sub-models: the spring (elastic or hysteretic) part of the normal force and the
+// stiffnesses the other sub-models build on. Compression positive; d = overlap.
+//
+// HertzNormal (Hertz 1882; DESIGN.md 2.4; LIGGGHTS normal_model_hertz.h):
+//   F = k_n d,  k_n = 4/3 E* sqrt(R* d),  damping stiffness S_n = 2 E* sqrt(R* d),
+//   k_t = 8 G* sqrt(R* d) (Mindlin).
+// LinearNormal (Hooke spring–dashpot; LIGGGHTS normal_model_hooke.h for the derived k_n):
+//   F = k_n d with k_n given per material pair, or
+//   k_n = 16/15 sqrt(R*) E* (15 m* v_c^2 / (16 sqrt(R*) E*))^(1/5) (the linear spring with the
+//   same maximum overlap as Hertz at impact speed v_c); k_t given or 2/7 k_n.
+// EEPANormal (Thakur, Morrissey, Sun, Chen & Ooi 2014, Granular Matter 16:383; Thakur, Ooi &
+//   Ahmadian 2016, Powder Technol. 293:130, Eq. 2), exponent n in {1, 1.5}:
+//     loading            F = f0 + k1 d^n                 if k2 (d^n - dp^n) >= k1 d^n
+//     unloading/reload.  F = f0 + k2 (d^n - dp^n)        if k1 d^n > k2 (d^n - dp^n) > -k_adh d^chi
+//     adhesive           F = f0 - k_adh d^chi            otherwise,
+//   with the plastic overlap dp^n = (1 - k1/k2) d_max^n (history: d_max, the largest overlap).
+//   Pull-off definition used here: the constant-parameter form of the paper — f0 and k_adh
+//   are given (per material pair), not derived from a surface energy; the pull-off force is
+//   then the minimum of F, reached where the unloading line meets the adhesive branch.
+//   k1 <= 0 means k1 = 2 E* R* (n = 1, so that k1 ~ R) or 4/3 E* sqrt(R*) (n = 1.5).
+//   Stiffness seen by damping and the tangential spring: the virgin loading slope
+//   k_load = n k1 d^(n-1) (= k1 for n = 1); k_t = 2/7 k_load (Thakur et al. 2016).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "contact/contact_input.hpp"
+#include "contact/interaction.hpp"
+#include "state/material_table.hpp"
+
+namespace grainscale {
+
+struct NormalState {
+  Real spring;                // elastic/hysteretic normal force (without damping)
+  Real stiffness;             // k_n used by rolling models (EPSD)
+  Real damping_stiffness;     // stiffness the normal dashpot is built on
+  Real tangential_stiffness;  // k_t
+};
+
+struct HertzNormal {
+  static constexpr const char* kName = "hertz";
+  static constexpr int kHistorySize = 0;
+  struct Pair {
+    Real effective_youngs, effective_shear;
+  };
+  static Pair make_pair(const PairModuli& m, const Interaction&) {
+    return {m.effective_youngs, m.effective_shear};
+  }
+  static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
+    const Real sqrt_rd = std::sqrt(c.r_eff * c.overlap);
+    const Real kn = (4.0 / 3.0) * p.effective_youngs * sqrt_rd;
+    return {kn * c.overlap, kn, 2 * p.effective_youngs * sqrt_rd, 8 * p.effective_shear * sqrt_rd};
+  }
+};
+
+struct LinearNormal {
+  static constexpr const char* kName = "linear";
+  static constexpr int kHistorySize = 0;
+  struct Pair {
+    Real normal_stiffness;      // > 0: given; else derived per contact
+    Real tangential_ratio;      // k_t / k_n when k_t is not given
+    Real tangential_stiffness;  // > 0: given
+    Real effective_youngs;
+    Real characteristic_velocity;
+  };
+  static Pair make_pair(const PairModuli& m, const Interaction& in) {
+    return {in.normal_stiffness, 2.0 / 7.0, in.tangential_stiffness, m.effective_youngs,
+            in.characteristic_velocity};
+  }
+  static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
+    Real kn = p.normal_stiffness;
+    if (!(kn > 0)) {
+      const Real a = std::sqrt(c.r_eff) * p.effective_youngs;
+      const Real v = p.characteristic_velocity;
+      kn = (16.0 / 15.0) * a * std::pow(15 * c.m_eff * v * v / (16 * a), 0.2);
+    }
+    const Real kt = p.tangential_stiffness > 0 ? p.tangential_stiffness : p.tangential_ratio * kn;
+    return {kn * c.overlap, kn, kn, kt};
+  }
+};
+
+struct EEPANormal {
+  static constexpr const char* kName = "eepa";
+  static constexpr int kHistorySize = 1;  // d_max (scalar)
+  struct Pair {
+    Real exponent;            // n
+    Real loading_stiffness;   // k1 (> 0 given; else derived per contact)
+    Real unloading_ratio;     // k2 / k1 >= 1
+    Real adhesive_stiffness;  // k_adh
+    Real pull_off_force;      // f0
+    Real adhesion_exponent;   // chi
+    Real effective_youngs;
+  };
+  static Pair make_pair(const PairModuli& m, const Interaction& in) {
+    return {in.eepa_exponent,  in.loading_stiffness, in.unloading_ratio, in.adhesive_stiffness,
+            in.pull_off_force, in.adhesion_exponent, m.effective_youngs};
+  }
+  static Real power(Real x, Real n) {
+    return n == 1 ? x : (n == 1.5 ? x * std::sqrt(x) : std::pow(x, n));
+  }
+  static NormalState evaluate(const Pair& p, const ContactInput& c, Real* history) {
+    const Real n = p.exponent;
+    Real k1 = p.loading_stiffness;
+    if (!(k1 > 0))
+      k1 = n == 1 ? 2 * p.effective_youngs * c.r_eff
+                  : (4.0 / 3.0) * p.effective_youngs * std::sqrt(c.r_eff);
+    const Real k2 = p.unloading_ratio * k1;
+    Real& d_max = history[0];
+    const Real d = c.overlap;
+    if (d > d_max) d_max = d;
+    const Real dn = power(d, n);
+    const Real dpn = (1 - k1 / k2) * power(d_max, n);
+    const Real f_load = k1 * dn;
+    const Real f_unload = k2 * (dn - dpn);
+    const Real f_adh = -p.adhesive_stiffness * power(d, p.adhesion_exponent);
+    Real f;
+    if (f_unload >= f_load)
+      f = f_load;
+    else if (f_unload > f_adh)
+      f = f_unload;
+    else
+      f = f_adh;
+    const Real k_load = n == 1 ? k1 : n * k1 * power(d, n - 1);
+    return {p.pull_off_force + f, k_load, k_load, (2.0 / 7.0) * k_load};
+  }
+};
+
+}  // namespace grainscale
