@@ -38,31 +38,32 @@ install: system-deps $(VENV)/.installed
 demo: install
 	$(PY) -m grainscale.examples.pour_and_settle --output out/demo
 
-test: install
+# Lint, the C++ unit tests, then the Python suite (unit, physics validation, demo).
+test: install lint test-cpp
 	$(PY) -m pytest -q tests
 
-test-cpp: system-deps
-	cmake -S . -B build/cpp-tests -DGRAINSCALE_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
-	cmake --build build/cpp-tests -j2
-	ctest --test-dir build/cpp-tests --output-on-failure
+test-cpp: install
+	$(VENV)/bin/cmake -S . -B build/cpp-tests -DGRAINSCALE_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+	$(VENV)/bin/cmake --build build/cpp-tests -j2
+	$(VENV)/bin/ctest --test-dir build/cpp-tests --output-on-failure
 
 bench: install
 	$(PY) bench/python/settle.py
 
-bench-cpp: system-deps
-	cmake -S . -B build/bench -DGRAINSCALE_BUILD_BENCH=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
-	cmake --build build/bench -j2
+bench-cpp: install
+	$(VENV)/bin/cmake -S . -B build/bench -DGRAINSCALE_BUILD_BENCH=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+	$(VENV)/bin/cmake --build build/bench -j2
 	./build/bench/bench_pair_loop
 	./build/bench/bench_neighbor_build
 
 lint: install
-	$(VENV)/bin/ruff check python tests bench examples
-	$(VENV)/bin/ruff format --check python tests bench examples
+	$(VENV)/bin/ruff check python tests bench
+	$(VENV)/bin/ruff format --check python tests bench
 	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 format: install
-	$(VENV)/bin/ruff format python tests bench examples
-	$(VENV)/bin/ruff check --fix python tests bench examples
+	$(VENV)/bin/ruff format python tests bench
+	$(VENV)/bin/ruff check --fix python tests bench
 	$(VENV)/bin/clang-format -i $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 clean:

@@ -119,10 +119,26 @@ class Pair:
     def __post_init__(self) -> None:
         if self.restitution is not None:
             in_range("Pair", "restitution", self.restitution, 0, 1)
-        for name in ("friction", "rolling_friction", "rolling_damping"):
+        for name in ("friction", "rolling_friction", "rolling_damping", "adhesive_stiffness"):
             v = getattr(self, name)
             if v is not None:
                 non_negative("Pair", name, v)
+        for name in (
+            "normal_stiffness",
+            "tangential_stiffness",
+            "characteristic_velocity",
+            "loading_stiffness",
+            "adhesion_exponent",
+        ):
+            v = getattr(self, name)
+            if v is not None:
+                positive("Pair", name, v)
+        if self.unloading_ratio is not None:
+            r = float(self.unloading_ratio)
+            if not (r >= 1 and math.isfinite(r)):
+                raise ValueError(f"Pair.unloading_ratio must be >= 1 (k2/k1), got {r!r}")
+        if self.pull_off_force is not None and not math.isfinite(float(self.pull_off_force)):
+            raise ValueError(f"Pair.pull_off_force must be finite (N), got {self.pull_off_force!r}")
 
 
 # --------------------------------------------------------------------------- laws
