@@ -370,7 +370,8 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     }
     ++step_;
     time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;
-    if (!(std::sqrt(comm_.max(max_d2)) + wall_shift <= half_skin))
+    apply_insertions_and_outlets();  // may add/remove particles: lists become invalid
+    if (!lists_valid_ || !(std::sqrt(comm_.max(max_d2)) + wall_shift <= half_skin))
       rebuild();
     else
       ghosts_.forward(ps_);

@@ -85,6 +85,9 @@ class Level {
   std::vector<Interaction> interaction_table() const;
   void save_histories();
   void rebuild();
+  // Insertion and outlets (level/level_insert.cpp): runs once per step after the drift;
+  // adding or removing particles invalidates the lists, so the step rebuilds them.
+  void apply_insertions_and_outlets();
 
   Domain domain_;
   MaterialTable materials_;
