@@ -40,6 +40,7 @@ inline double thread_cpu_ns() {
 struct Timing {
   double wall_ns;
   double cpu_ns;
+  double min_wall_ns;  // fastest repetition (least disturbed by other processes)
 };
 
 // Runs setup() untimed, then body() timed, `reps` times; returns the medians of body().
@@ -62,7 +63,7 @@ Timing median_ns(int reps, Setup&& setup, Body&& body) {
     wall.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count());
     cpu.push_back(c1 - c0);
   }
-  return {median(wall), median(cpu)};
+  return {median(wall), median(cpu), *std::min_element(wall.begin(), wall.end())};
 }
 
 // Scale factor for N from argv[1] (default 1); exits with a usage message on a bad value.
@@ -131,13 +132,14 @@ inline Real max_radius(const grainscale::ParticleStore& ps) {
   return r;
 }
 
-// One result line: "name: value unit (N=..., reps=..., cpu=...[, extra])". `value` comes from
-// the wall clock; `cpu` is the same figure from the thread's CPU time, which shows how much of
-// the wall time other processes on a busy machine took.
-inline void report(const std::string& name, double value, double cpu, const char* unit, Index n,
-                   int reps, const std::string& extra = "") {
-  std::printf("%s: %.4g %s (N=%d, reps=%d, cpu=%.4g%s%s)\n", name.c_str(), value, unit, n, reps,
-              cpu, extra.empty() ? "" : ", ", extra.c_str());
+// One result line: "name: value unit (N=..., reps=..., cpu=..., min=...[, extra])". `value` is
+// the median wall-clock figure; `cpu` the same from the thread's CPU time (shows how much of the
+// wall time other processes on a busy machine took) and `min` from the fastest repetition.
+inline void report(const std::string& name, const Timing& t, double divisor, const char* unit,
+                   Index n, int reps, const std::string& extra = "") {
+  std::printf("%s: %.4g %s (N=%d, reps=%d, cpu=%.4g, min=%.4g%s%s)\n", name.c_str(),
+              t.wall_ns / divisor, unit, n, reps, t.cpu_ns / divisor, t.min_wall_ns / divisor,
+              extra.empty() ? "" : ", ", extra.c_str());
   std::fflush(stdout);
 }
 

@@ -9,7 +9,8 @@
 //     cell edge set by the largest diameter and the number of candidates per cell.
 // Cell edge = largest diameter + skin, at most 2 N + 64 cells (as in Level::rebuild). The list
 // gets the Hertz-Mindlin history stride (3), so clearing the history is part of the build.
-// Figures: median wall-clock time per owned particle and per list entry.
+// Figures: median wall-clock time per owned particle and per list entry (plus thread CPU time,
+// cpu=, and the fastest repetition, min=).
 //
 // Usage: bench_neighbor_build [scale]   (N = 50k and 200k times scale)
 #include <cstdio>
@@ -85,11 +86,10 @@ Row run_case(const std::string& name, Index n, bool poly, int reps) {
   char extra[128];
   std::snprintf(extra, sizeof extra, "half-list entries/particle=%.2f, stencil candidates=%.1f",
                 row.entries_per_particle, row.candidates_per_particle);
-  bench::report("cell_binning_" + name, bin.wall_ns / n, bin.cpu_ns / n, "ns/particle", n, reps);
-  bench::report("build_pair_list_" + name, list_t.wall_ns / n, list_t.cpu_ns / n, "ns/particle", n,
-                reps, extra);
-  bench::report("build_pair_list_" + name + "_per_entry", list_t.wall_ns / entries,
-                list_t.cpu_ns / entries, "ns/entry", n, reps, extra);
+  bench::report("cell_binning_" + name, bin, n, "ns/particle", n, reps);
+  bench::report("build_pair_list_" + name, list_t, n, "ns/particle", n, reps, extra);
+  bench::report("build_pair_list_" + name + "_per_entry", list_t, entries, "ns/entry", n, reps,
+                extra);
   return row;
 }
 
@@ -104,16 +104,18 @@ int main(int argc, char** argv) {
     rows.push_back(run_case("mono", n, false, reps));
     rows.push_back(run_case("poly1:3", n, true, reps));
   }
-  std::printf("\n%-8s %7s %9s %12s %9s %10s %13s %9s\n", "case", "N", "entries/p", "candidates/p",
-              "bin ns/p", "list ns/p", "list ns/entry", "(cpu)");
-  for (const Row& r : rows)
-    std::printf("%-8s %7d %9.2f %12.1f %9.2f %10.1f %13.1f %9.1f\n", r.name.c_str(), r.n,
+  std::printf("\n%-8s %7s %9s %12s %9s %10s %13s | %10s %13s\n", "case", "N", "entries/p",
+              "candidates/p", "bin ns/p", "list ns/p", "list ns/entry", "cpu ns/p", "cpu ns/entry");
+  for (const Row& r : rows) {
+    const double entries = r.entries_per_particle * r.n;
+    std::printf("%-8s %7d %9.2f %12.1f %9.2f %10.1f %13.1f | %10.1f %13.1f\n", r.name.c_str(), r.n,
                 r.entries_per_particle, r.candidates_per_particle, r.bin.wall_ns / r.n,
-                r.list.wall_ns / r.n, r.list.wall_ns / (r.entries_per_particle * r.n),
-                r.list.cpu_ns / (r.entries_per_particle * r.n));
+                r.list.wall_ns / r.n, r.list.wall_ns / entries, r.list.cpu_ns / r.n,
+                r.list.cpu_ns / entries);
+  }
   std::printf(
-      "(wall-clock medians of %d repetitions, (cpu) = thread CPU time; entries = half-list "
-      "entries; candidates = points in the 27-cell stencil, each pair is examined twice)\n",
+      "(medians of %d repetitions: wall clock, and list build in thread CPU time after the |; "
+      "entries = half-list entries; candidates = points in the 27-cell stencil)\n",
       reps);
   return 0;
 }

@@ -1,8 +1,9 @@
 // Microbenchmark of the particle-particle force loop and of a whole Level.
 //
-// 1. and 2. accumulate_pair_forces<HertzMindlin, kUpdate = true, kStats = false> on a static
-//    packing: d = 2 mm glass-like spheres (E = 1e7 Pa, nu = 0.3, rho = 2500 kg/m^3, e = 0.5,
-//    mu = 0.5) on a simple-cubic lattice of spacing 0.995 d with seeded uniform jitter of
+// 1. and 2. accumulate_pair_forces<HertzMindlin, kUpdate = true, kStats = false> (HertzMindlin =
+//    ContactModel<HertzNormal, HertzDamping, NoRolling>, the default law) on a static packing: d =
+//    2 mm glass-like spheres (E = 1e7 Pa, nu = 0.3, rho = 2500 kg/m^3, e = 0.5, mu = 0.5) on a
+//    simple-cubic lattice of spacing 0.995 d with seeded uniform jitter of
 //    +-0.01 d per coordinate, so lattice neighbours overlap by 0.5 % of d on average and about
 //    70 % of them touch; half list built with a skin of 0.1 d, in cell order as in a Level.
 //    Seeded random velocities (+-1 mm/s) and spins (+-1 rad/s); the tangential springs are
@@ -15,7 +16,11 @@
 //    0.2 mm, gravity), timed from a fresh Level (first list build included): ns per
 //    particle-step.
 //
+// Each line reports the median wall-clock figure, plus the same in thread CPU time (cpu=) and
+// for the fastest repetition (min=): on a shared machine the spread between runs is large.
+//
 // Usage: bench_pair_loop [scale]   (N = 200k for the force loop, 50k for the Level, times scale)
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +30,8 @@
 
 #include "bench_common.hpp"
 #include "contact/contact_law.hpp"
-#include "contact/hertz_mindlin.hpp"
+#include "contact/contact_model.hpp"
+#include "contact/interaction.hpp"
 #include "contact/pair_loop.hpp"
 #include "geometry/plane_wall.hpp"
 #include "level/level.hpp"
@@ -43,6 +49,19 @@ using bench::Vec3;
 constexpr Real kDiameter = 2e-3;
 constexpr Real kDensity = 2500;
 const grainscale::MaterialProperties kGlass{kDensity, 1e7, 0.3};
+
+// Hertz-Mindlin with LIGGGHTS-type damping, no rolling resistance (the default law).
+using HertzMindlin = grainscale::ContactModel<grainscale::HertzNormal, grainscale::HertzDamping,
+                                              grainscale::NoRolling>;
+
+// e = 0.5, mu = 0.5 for every material pair, walls included.
+std::vector<grainscale::Interaction> interactions(const grainscale::MaterialTable& materials) {
+  grainscale::Interaction in;
+  in.restitution = 0.5;
+  in.friction = 0.5;
+  const std::size_t stride = materials.n_materials() + 1;
+  return std::vector<grainscale::Interaction>(stride * stride, in);
+}
 
 void zero_forces(grainscale::ParticleStore& ps) {
   for (Index i = 0; i < ps.n_local(); ++i) {
@@ -68,35 +87,31 @@ void bench_force_loop(Index n, grainscale::TangentialHistory history, const std:
 
   grainscale::MaterialTable materials;
   materials.add(kGlass);
-  grainscale::HertzMindlinSettings settings;
-  settings.restitution = 0.5;
-  settings.friction = 0.5;
+  grainscale::ContactSettings settings;
   settings.history = history;
-  grainscale::HertzMindlin law(settings);
-  law.prepare(materials);
+  HertzMindlin law(settings);
+  law.prepare(materials, interactions(materials));
 
   grainscale::CellGrid grid;
   grid.build(ps.position.data(), ps.n_local(), d + skin, 2 * static_cast<std::size_t>(n) + 64);
   grainscale::ContactList list;
-  list.history_stride = grainscale::HertzMindlin::kHistorySize;
+  list.history_stride = HertzMindlin::kHistorySize;
   grainscale::build_pair_list(ps, grid, skin, list);
 
   grainscale::ContactStats stats;
   for (int s = 0; s < 200; ++s) {
     zero_forces(ps);
-    grainscale::accumulate_pair_forces<grainscale::HertzMindlin, true, false>(law, ps, list, dt,
-                                                                              stats);
+    grainscale::accumulate_pair_forces<HertzMindlin, true, false>(law, ps, list, dt, stats);
   }
   const std::vector<Real> developed = list.history;
 
   // Contact census on the developed state (kUpdate = false leaves the springs alone).
   stats.record = true;
   zero_forces(ps);
-  grainscale::accumulate_pair_forces<grainscale::HertzMindlin, false, true>(law, ps, list, dt,
-                                                                            stats);
+  grainscale::accumulate_pair_forces<HertzMindlin, false, true>(law, ps, list, dt, stats);
   const double contacts = static_cast<double>(stats.contacts);
   Index sliding = 0;
-  const grainscale::HertzMindlin::Pair& pair = law.pair(0, 0);
+  const HertzMindlin::Pair& pair = law.pair(0, 0);
   for (const grainscale::ContactRecord& c : stats.records) {
     const Real fn = c.force.dot(c.normal);
     const Real ft = (c.force - fn * c.normal).norm();
@@ -111,8 +126,7 @@ void bench_force_loop(Index n, grainscale::TangentialHistory history, const std:
         zero_forces(ps);
       },
       [&] {
-        grainscale::accumulate_pair_forces<grainscale::HertzMindlin, true, false>(law, ps, list, dt,
-                                                                                  stats);
+        grainscale::accumulate_pair_forces<HertzMindlin, true, false>(law, ps, list, dt, stats);
       });
   Real checksum = 0;
   for (Index i = 0; i < n; ++i) checksum += ps.force[i].squaredNorm();
@@ -124,9 +138,8 @@ void bench_force_loop(Index n, grainscale::TangentialHistory history, const std:
                 "contacts/particle=%.2f, list entries/particle=%.2f, touching=%.0f%%, "
                 "sliding=%.0f%%",
                 contacts / n, entries / n, 100 * contacts / entries, 100 * sliding / contacts);
-  bench::report(name, t.wall_ns / contacts, t.cpu_ns / contacts, "ns/contact", n, reps, extra);
-  bench::report(name + "_per_entry", t.wall_ns / entries, t.cpu_ns / entries, "ns/entry", n, reps,
-                extra);
+  bench::report(name, t, contacts, "ns/contact", n, reps, extra);
+  bench::report(name + "_per_entry", t, entries, "ns/entry", n, reps, extra);
 }
 
 // The 'settle' case of bench/python/settle_case.py, with std::mt19937_64 instead of numpy.
@@ -154,13 +167,15 @@ void bench_settle(Index n, int steps, int reps) {
   for (int rep = 0; rep < reps; ++rep) {
     grainscale::Level level(grainscale::Domain(Vec3::Zero(), hi, {false, false, false}));
     const int m = level.add_material(kGlass);
-    grainscale::HertzMindlinSettings settings;
-    settings.restitution = 0.5;
-    settings.friction = 0.5;
+    grainscale::ContactSettings settings;
     settings.limit_force = false;
     settings.tangential_damping = true;
     settings.history = grainscale::TangentialHistory::Total;
-    level.set_contact_law(grainscale::HertzMindlin(settings));
+    level.set_contact_law(grainscale::make_contact_law("hertz", "none", settings));
+    grainscale::Interaction interaction;
+    interaction.restitution = 0.5;
+    interaction.friction = 0.5;
+    level.set_default_interaction(interaction);
     level.set_gravity(Vec3(0, 0, -9.81));
     level.set_time_step(1e-5, false);
     level.set_skin(0.2e-3);
@@ -190,9 +205,10 @@ void bench_settle(Index n, int steps, int reps) {
                 "steps=%d, rebuilds=%lld, contacts at end=%lld (incl. walls), lost=%lld", steps,
                 static_cast<long long>(rebuilds), static_cast<long long>(contacts),
                 static_cast<long long>(lost));
-  const double per = 1e9 / (static_cast<double>(n) * steps);
-  bench::report("level_settle", bench::median(seconds) * per, bench::median(cpu_seconds) * per,
-                "ns/particle-step", n, reps, extra);
+  const bench::Timing t{1e9 * bench::median(seconds), 1e9 * bench::median(cpu_seconds),
+                        1e9 * *std::min_element(seconds.begin(), seconds.end())};
+  bench::report("level_settle", t, static_cast<double>(n) * steps, "ns/particle-step", n, reps,
+                extra);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 
+#include "contact/contact_input.hpp"
 #include "contact/contact_stats.hpp"
 #include "geometry/plane_wall.hpp"
 #include "neighbor/neighbor_list.hpp"

@@ -17,11 +17,14 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "contact/contact_input.hpp"
+#include "contact/contact_law.hpp"
+#include "contact/contact_model.hpp"
 #include "contact/contact_stats.hpp"
-#include "contact/hertz_mindlin.hpp"
+#include "contact/interaction.hpp"
 #include "contact/pair_loop.hpp"
 #include "core/errors.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -61,6 +64,18 @@ bool close_rel(Real a, Real b, Real rel) { return std::abs(a - b) <= rel * std::
 
 const gs::MaterialProperties kGlass{2500.0, 1e7, 0.3};
 
+// Hertz-Mindlin with LIGGGHTS-type damping and no rolling resistance (the default law).
+using HertzMindlin = gs::ContactModel<gs::HertzNormal, gs::HertzDamping, gs::NoRolling>;
+
+// The same interaction (restitution e, friction 0.5) for every material pair, walls included.
+std::vector<gs::Interaction> interactions(const gs::MaterialTable& materials, Real e) {
+  gs::Interaction in;
+  in.restitution = e;
+  in.friction = 0.5;
+  const std::size_t stride = materials.n_materials() + 1;
+  return std::vector<gs::Interaction>(stride * stride, in);
+}
+
 void add_particle(gs::ParticleStore& ps, GlobalId id, const Vec3& x, Real r,
                   const Vec3& v = Vec3::Zero()) {
   const Real m = kGlass.density * (4.0 / 3.0) * M_PI * r * r * r;
@@ -81,17 +96,16 @@ void test_hertz_normal_force() {
   g_test = "hertz_normal_force";
   gs::MaterialTable materials;
   materials.add(kGlass);
-  gs::HertzMindlinSettings settings;
-  settings.restitution = 1.0;  // elastic: no normal (or tangential) damping
-  settings.friction = 0.5;
-  gs::HertzMindlin law(settings);
-  law.prepare(materials);
+  CHECK(std::holds_alternative<HertzMindlin>(
+            gs::make_contact_law("hertz", "none", gs::ContactSettings{})),
+        "make_contact_law(\"hertz\", \"none\") is not the law tested here");
+  HertzMindlin law{gs::ContactSettings{}};
+  law.prepare(materials, interactions(materials, 1.0));  // e = 1: no normal or tangential damping
   const Real nu = kGlass.poisson_ratio, E = kGlass.youngs_modulus;
   const Real e_star = 1 / (2 * (1 - nu * nu) / E);
-  CHECK(close_rel(law.pair(0, 0).effective_youngs, e_star, 1e-14),
-        "E* = " + str(law.pair(0, 0).effective_youngs) + ", expected " + str(e_star));
-  CHECK(law.pair(0, 0).damping_factor == 0,
-        "damping factor for e = 1 is " + str(law.pair(0, 0).damping_factor));
+  CHECK(close_rel(law.pair(0, 0).normal.effective_youngs, e_star, 1e-14),
+        "E* = " + str(law.pair(0, 0).normal.effective_youngs) + ", expected " + str(e_star));
+  CHECK(law.pair(0, 0).damping == 0, "damping for e = 1 is " + str(law.pair(0, 0).damping));
 
   const Real r1 = 1e-3, r2 = 2e-3;
   const Real r_eff = r1 * r2 / (r1 + r2);
@@ -102,7 +116,7 @@ void test_hertz_normal_force() {
     for (Real vn : {0.0, -0.3, 0.2}) {
       Real history[3] = {0, 0, 0};
       const gs::ContactInput c{n, delta, r_eff, 1e-5, vn * n, 1e-6};
-      const Vec3 f = law.force(law.pair(0, 0), c, history);
+      const Vec3 f = law.force(law.pair(0, 0), c, history).force;
       const std::string tag = "delta=" + str(delta) + " vn=" + str(vn);
       CHECK(close_rel(f.dot(n), expected, 1e-12),
             tag + ": F.n = " + str(f.dot(n)) + ", expected " + str(expected));
@@ -118,7 +132,7 @@ void test_hertz_normal_force() {
     add_particle(ps, 0, x1 + (r1 + r2 - delta) * n, r1, -0.1 * n);
     add_particle(ps, 1, x1, r2, 0.1 * n);
     gs::ContactList list;
-    list.history_stride = gs::HertzMindlin::kHistorySize;
+    list.history_stride = HertzMindlin::kHistorySize;
     build_list(ps, 1e-4, 64, list);
     CHECK(list.size() == 1, "pair list of two touching spheres has " + std::to_string(list.size()) +
                                 " entries, expected 1");
@@ -128,7 +142,7 @@ void test_hertz_normal_force() {
       ps.torque[i].setZero();
     }
     gs::ContactStats stats;
-    gs::accumulate_pair_forces<gs::HertzMindlin, true, true>(law, ps, list, 1e-6, stats);
+    gs::accumulate_pair_forces<HertzMindlin, true, true>(law, ps, list, 1e-6, stats);
     const Real overlap = (r1 + r2) - (ps.position[0] - ps.position[1]).norm();
     const Real expected_loop = (4.0 / 3.0) * e_star * std::sqrt(r_eff) * std::pow(overlap, 1.5);
     const std::string tag = "pair loop delta=" + str(delta);
@@ -225,7 +239,7 @@ void test_history_carry() {
   g_test = "history_carry";
   const Index n = 500;
   const Real skin = 0.2e-3, dt = 1e-5;
-  const int stride = gs::HertzMindlin::kHistorySize;
+  const int stride = HertzMindlin::kHistorySize;
   gs::ParticleStore ps;
   random_poly_store(ps, n, 1e-3, 0.035, 99);
   std::mt19937_64 rng(5);
@@ -236,15 +250,15 @@ void test_history_carry() {
   }
   gs::MaterialTable materials;
   materials.add(kGlass);
-  gs::HertzMindlin law(gs::HertzMindlinSettings{});
-  law.prepare(materials);
+  HertzMindlin law{gs::ContactSettings{}};
+  law.prepare(materials, interactions(materials, 0.5));
 
   gs::ContactList list;
   list.history_stride = stride;
   build_list(ps, skin, 2 * n + 64, list);
   gs::ContactStats stats;
   for (int s = 0; s < 3; ++s)
-    gs::accumulate_pair_forces<gs::HertzMindlin, true, false>(law, ps, list, dt, stats);
+    gs::accumulate_pair_forces<HertzMindlin, true, false>(law, ps, list, dt, stats);
 
   // Expected state per (owner id, partner id): its history if non-zero (a touching contact).
   std::map<std::pair<GlobalId, GlobalId>, std::vector<Real>> saved;
