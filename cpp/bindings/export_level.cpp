@@ -11,7 +11,8 @@ namespace {
 
 using Array3 = py::array_t<Real, py::array::c_style | py::array::forcecast>;
 
-Vec3 to_vec3(const std::array<Real, 3>& a) { return Vec3(a[0], a[1], a[2]); }
+using Vec3A = std::array<Real, 3>;
+Vec3 to_vec3(const Vec3A& a) { return Vec3(a[0], a[1], a[2]); }
 std::array<Real, 3> from_vec3(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
 // Zero-copy view of the first n entries of a SharedArray. The capsule holds a reference to the
@@ -109,11 +110,10 @@ void export_level(py::module_& m) {
           py::arg("material"))
       .def(
           "add_plane_wall",
-          [](Level& l, std::array<Real, 3> point, std::array<Real, 3> normal,
-             std::array<Real, 3> velocity, int material) {
-            PlaneWall w;
-            w.shape = PlaneWall::Shape::Infinite;
-            w.point = to_vec3(point);
+          [](Level& l, Vec3A point, Vec3A normal, Vec3A velocity, int material) {
+            Wall w;
+            w.shape = WallShape::Plane;
+            w.point = w.origin = to_vec3(point);
             w.normal = to_vec3(normal);
             w.velocity = to_vec3(velocity);
             w.material = material;
@@ -122,11 +122,10 @@ void export_level(py::module_& m) {
           py::arg("point"), py::arg("normal"), py::arg("velocity"), py::arg("material"))
       .def(
           "add_rectangle_wall",
-          [](Level& l, std::array<Real, 3> corner, std::array<Real, 3> edge1,
-             std::array<Real, 3> edge2, std::array<Real, 3> velocity, int material) {
-            PlaneWall w;
-            w.shape = PlaneWall::Shape::Rectangle;
-            w.point = to_vec3(corner);
+          [](Level& l, Vec3A corner, Vec3A edge1, Vec3A edge2, Vec3A velocity, int material) {
+            Wall w;
+            w.shape = WallShape::Rectangle;
+            w.point = w.origin = to_vec3(corner);
             w.edge1 = to_vec3(edge1);
             w.edge2 = to_vec3(edge2);
             w.velocity = to_vec3(velocity);
@@ -135,6 +134,82 @@ void export_level(py::module_& m) {
           },
           py::arg("corner"), py::arg("edge1"), py::arg("edge2"), py::arg("velocity"),
           py::arg("material"))
+      .def(
+          "add_cylinder_wall",
+          [](Level& l, Vec3A point, Vec3A axis, Real radius, Real length, bool inside,
+             Vec3A velocity, int material) {
+            Wall w;
+            w.shape = WallShape::Cylinder;
+            w.point = w.origin = to_vec3(point);
+            w.axis = to_vec3(axis);
+            w.radius = radius;
+            w.length = length;
+            w.inside = inside;
+            w.velocity = to_vec3(velocity);
+            w.material = material;
+            return l.add_wall(w);
+          },
+          py::arg("point"), py::arg("axis"), py::arg("radius"), py::arg("length"),
+          py::arg("inside"), py::arg("velocity"), py::arg("material"))
+      .def(
+          "add_mesh_wall",
+          [](Level& l, const Array3& vertices,
+             const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>& triangles,
+             Vec3A origin, Vec3A velocity, int material) {
+            if (vertices.ndim() != 2 || vertices.shape(1) != 3)
+              throw py::value_error("Mesh.vertices must have shape (V, 3)");
+            if (triangles.ndim() != 2 || triangles.shape(1) != 3)
+              throw py::value_error("Mesh.triangles must have shape (T, 3)");
+            auto mesh = std::make_shared<TriangleMesh>();
+            const Real* v = vertices.data();
+            for (py::ssize_t k = 0; k < vertices.shape(0); ++k)
+              mesh->vertices.emplace_back(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
+            const std::int32_t* t = triangles.data();
+            for (py::ssize_t k = 0; k < triangles.shape(0); ++k)
+              mesh->triangles.push_back({t[3 * k], t[3 * k + 1], t[3 * k + 2]});
+            Wall w;
+            w.shape = WallShape::Mesh;
+            w.mesh = mesh;
+            w.point = w.origin = to_vec3(origin);
+            w.velocity = to_vec3(velocity);
+            w.material = material;
+            return l.add_wall(w);
+          },
+          py::arg("vertices"), py::arg("triangles"), py::arg("origin"), py::arg("velocity"),
+          py::arg("material"))
+      .def(
+          "set_wall_motion",
+          [](Level& l, int i, Vec3A velocity, Vec3A angular_velocity, Vec3A origin) {
+            l.set_wall_motion(i, to_vec3(velocity), to_vec3(angular_velocity), to_vec3(origin));
+          },
+          py::arg("index"), py::arg("velocity"), py::arg("angular_velocity"), py::arg("origin"))
+      .def(
+          "set_wall_servo",
+          [](Level& l, int i, bool enabled, Vec3A direction, Real target_force, Real gain,
+             Real max_speed) {
+            Servo s;
+            s.enabled = enabled;
+            s.direction = to_vec3(direction);
+            s.target_force = target_force;
+            s.gain = gain;
+            s.max_speed = max_speed;
+            l.set_wall_servo(i, s);
+          },
+          py::arg("index"), py::arg("enabled"), py::arg("direction"), py::arg("target_force"),
+          py::arg("gain"), py::arg("max_speed"))
+      .def("wall_velocity", [](Level& l, int i) { return from_vec3(l.walls().at(i).velocity); })
+      .def("wall_origin", [](Level& l, int i) { return from_vec3(l.walls().at(i).origin); })
+      .def("wall_vertices",
+           [](Level& l, int i) {
+             const Wall& w = l.walls().at(i);
+             if (!w.mesh) throw py::value_error("wall " + std::to_string(i) + " is not a mesh");
+             py::array_t<Real> out(
+                 {static_cast<py::ssize_t>(w.mesh->vertices.size()), py::ssize_t(3)});
+             auto o = out.mutable_unchecked<2>();
+             for (std::size_t k = 0; k < w.mesh->vertices.size(); ++k)
+               for (int c = 0; c < 3; ++c) o(k, c) = w.mesh->vertices[k][c];
+             return out;
+           })
       .def("num_walls", [](Level& l) { return l.walls().size(); })
       .def("wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); })
       .def("wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); })

@@ -6,9 +6,11 @@ namespace py = pybind11;
 
 void export_level(py::module_& m);
 void export_helpers(py::module_& m);
+void export_insert(py::module_& m);  // after export_level: adds methods to Level
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "grainscale C++ core (private; use the grainscale package)";
   export_level(m);
   export_helpers(m);
+  export_insert(m);
 }

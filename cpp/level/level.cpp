@@ -172,30 +172,95 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
   return first;
 }
 
-int Level::add_wall(const PlaneWall& wall) {
-  PlaneWall w = wall;
-  if (!w.point.allFinite()) throw_invalid("Wall.point", "finite (m)", w.point.transpose());
-  if (!w.velocity.allFinite())
-    throw_invalid("Wall.velocity", "finite (m/s)", w.velocity.transpose());
-  if (w.shape == PlaneWall::Shape::Infinite) {
-    const Real len = w.normal.norm();
+int Level::add_wall(const Wall& wall) {
+  Wall w = wall;
+  for (const Vec3* v : {&w.point, &w.velocity, &w.angular_velocity, &w.origin})
+    if (!v->allFinite()) throw_invalid("Wall motion and position", "finite", v->transpose());
+  auto unit = [](Vec3& v, const char* name) {
+    const Real len = v.norm();
     if (!(len > 0) || !std::isfinite(len))
-      throw_invalid("Plane.normal", "a non-zero finite vector", w.normal.transpose());
-    w.normal /= len;
-  } else {
-    const Vec3 nrm = w.edge1.cross(w.edge2);
-    if (!(nrm.norm() > 0) || !nrm.allFinite())
-      throw_invalid("Rectangle.edge2", "finite and not parallel to edge1", w.edge2.transpose());
-    w.normal = nrm.normalized();
+      throw_invalid(name, "a non-zero finite vector", v.transpose());
+    v /= len;
+  };
+  Real reach =
+      (domain_.hi - domain_.lo).norm() + (w.origin - 0.5 * (domain_.lo + domain_.hi)).norm();
+  switch (w.shape) {
+    case WallShape::Plane:
+      unit(w.normal, "Plane.normal");
+      break;
+    case WallShape::Rectangle:
+      w.normal = w.edge1.cross(w.edge2);
+      if (!(w.normal.norm() > 0) || !w.normal.allFinite())
+        throw_invalid("Rectangle.edge2", "finite and not parallel to edge1", w.edge2.transpose());
+      w.normal.normalize();
+      break;
+    case WallShape::Cylinder:
+      unit(w.axis, "Cylinder.axis");
+      if (!(w.radius > 0) || !std::isfinite(w.radius))
+        throw_invalid("Cylinder.radius", "positive and finite (m)", w.radius);
+      if (!std::isfinite(w.length)) throw_invalid("Cylinder.length", "finite (m)", w.length);
+      break;
+    case WallShape::Mesh: {
+      if (!w.mesh || w.mesh->triangles.empty())
+        throw_invalid("Mesh.triangles", "at least one triangle", 0);
+      const int nv = static_cast<int>(w.mesh->vertices.size());
+      for (const Vec3& v : w.mesh->vertices)
+        if (!v.allFinite()) throw_invalid("Mesh.vertices", "finite (m)", v.transpose());
+      for (const auto& t : w.mesh->triangles)
+        for (int k : t)
+          if (k < 0 || k >= nv)
+            throw_invalid("Mesh.triangles", "vertex indices in [0, " + std::to_string(nv) + ")", k);
+      reach = w.mesh->radius_about(w.origin);
+      break;
+    }
   }
   if (w.material >= materials_.n_materials())
     throw_invalid("Wall.material", "a material known to the simulation or None (rigid)",
                   w.material);
   if (lists_valid_) save_histories();
   walls_.push_back(w);
+  wall_reach_.push_back(reach);
+  primitives_.first.push_back(static_cast<Index>(primitives_.wall.size()));
+  primitives_.wall.insert(primitives_.wall.end(), w.primitives(),
+                          static_cast<int>(walls_.size()) - 1);
+  mesh_bins_valid_.push_back(0);
   lists_valid_ = false;
   forces_valid_ = false;
   return static_cast<int>(walls_.size()) - 1;
+}
+
+void Level::set_wall_motion(int index, const Vec3& velocity, const Vec3& angular_velocity,
+                            const Vec3& origin) {
+  if (index < 0 || index >= static_cast<int>(walls_.size()))
+    throw_invalid("wall index", "in [0, " + std::to_string(walls_.size()) + ")", index);
+  for (const Vec3* v : {&velocity, &angular_velocity, &origin})
+    if (!v->allFinite()) throw_invalid("Wall motion", "finite", v->transpose());
+  Wall& w = walls_[index];
+  w.velocity = velocity;
+  w.angular_velocity = angular_velocity;
+  if (w.shape == WallShape::Mesh && origin != w.origin)
+    wall_reach_[index] = w.mesh->radius_about(origin);
+  w.origin = origin;
+  forces_valid_ = false;
+}
+
+void Level::set_wall_servo(int index, const Servo& servo) {
+  if (index < 0 || index >= static_cast<int>(walls_.size()))
+    throw_invalid("wall index", "in [0, " + std::to_string(walls_.size()) + ")", index);
+  Servo s = servo;
+  if (s.enabled) {
+    const Real len = s.direction.norm();
+    if (!(len > 0) || !std::isfinite(len))
+      throw_invalid("Servo.direction", "a non-zero finite vector", s.direction.transpose());
+    s.direction /= len;
+    if (!(s.gain > 0) || !std::isfinite(s.gain))
+      throw_invalid("Servo.gain", "positive and finite ((m/s)/N)", s.gain);
+    if (!(s.max_speed > 0) || !std::isfinite(s.max_speed))
+      throw_invalid("Servo.max_speed", "positive and finite (m/s)", s.max_speed);
+    if (!std::isfinite(s.target_force))
+      throw_invalid("Servo.target_force", "finite (N)", s.target_force);
+  }
+  walls_[index].servo = s;
 }
 
 Real Level::kinetic_energy() const {
@@ -230,8 +295,7 @@ void Level::prepare() {
   if (!law_prepared_) {
     const std::vector<Interaction> table = interaction_table();
     std::visit([&](auto& law) { law.prepare(materials_, table); }, law_);
-    for (PlaneWall& w : walls_)
-      w.law_material = w.material < 0 ? materials_.rigid_index() : w.material;
+    for (Wall& w : walls_) w.law_material = w.material < 0 ? materials_.rigid_index() : w.material;
     const int stride = history_size(law_);
     pairs_.history_stride = stride;
     wall_contacts_.history_stride = stride;
@@ -315,7 +379,17 @@ void Level::rebuild() {
   ghosts_.build(ps_, domain_, cutoff);
   grid_.build(ps_.position.data(), ps_.n_local(), cutoff, 2 * ps_.n_local() + 64);
   build_pair_list(ps_, grid_, skin_, pairs_);
-  build_wall_list(ps_, walls_, skin_, wall_contacts_);
+  // Mesh bins: once for a wall at rest, again after it moved or the reach grew.
+  const Real margin = r_max + skin_;
+  for (std::size_t w = 0; w < walls_.size(); ++w) {
+    if (walls_[w].shape != WallShape::Mesh) continue;
+    if (!mesh_bins_valid_[w] || w >= wall_shift_.size() || wall_shift_[w] > 0 ||
+        margin > mesh_bin_margin_)
+      walls_[w].mesh->build_bins(margin, cutoff);
+    mesh_bins_valid_[w] = 1;
+  }
+  mesh_bin_margin_ = std::max(mesh_bin_margin_, margin);
+  build_wall_list(ps_, walls_, primitives_.first, skin_, wall_contacts_);
 
   std::vector<GlobalId> keys(pairs_.size());
   for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
@@ -326,8 +400,7 @@ void Level::rebuild() {
   wall_carry_ = HistoryCarry();
 
   x_at_build_.assign(ps_.position.data(), ps_.position.data() + ps_.n_owned());
-  wall_point_at_build_.clear();
-  for (const PlaneWall& w : walls_) wall_point_at_build_.push_back(w.point);
+  wall_shift_.assign(walls_.size(), 0);
   lists_valid_ = true;
   ++rebuilds_;
   rebuild_seconds_ +=
@@ -345,14 +418,15 @@ void Level::compute_forces(const Law& law) {
     ps_.force[g].setZero();
     ps_.torque[g].setZero();
   }
-  for (PlaneWall& w : walls_) {
+  for (Wall& w : walls_) {
     w.force.setZero();
     w.torque.setZero();
   }
   if constexpr (kStats) stats_.clear();
   accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
   ghosts_.reverse(ps_);
-  accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, wall_contacts_, dt_, stats_);
+  accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, primitives_, wall_contacts_, dt_,
+                                               stats_);
 }
 
 template <class Law>
@@ -365,8 +439,8 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     const Real max_d2 = kick_drift(ps_, dt_, x_at_build_);
     Real wall_shift = 0;
     for (std::size_t k = 0; k < walls_.size(); ++k) {
-      walls_[k].advance(dt_);
-      wall_shift = std::max(wall_shift, (walls_[k].point - wall_point_at_build_[k]).norm());
+      wall_shift_[k] += walls_[k].advance(dt_, wall_reach_[k]);
+      wall_shift = std::max(wall_shift, wall_shift_[k]);
     }
     ++step_;
     time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;

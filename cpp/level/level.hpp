@@ -10,7 +10,11 @@
 
 #include "contact/contact_law.hpp"
 #include "contact/contact_stats.hpp"
-#include "geometry/plane_wall.hpp"
+#include "contact/wall_loop.hpp"
+#include "geometry/wall.hpp"
+#include "insert/outlet.hpp"
+#include "insert/pack.hpp"
+#include "insert/stream.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "parallel/communicator.hpp"
@@ -48,8 +52,13 @@ class Level {
   GlobalId add_particles(Index n, const Real* position, const Real* velocity,
                          const Real* angular_velocity, const Real* radius,
                          const std::int32_t* material);
-  int add_wall(const PlaneWall& wall);
-  std::vector<PlaneWall>& walls() { return walls_; }
+  // Validates and adds a wall (plane, rectangle, cylinder or triangle mesh); returns its index.
+  int add_wall(const Wall& wall);
+  std::vector<Wall>& walls() { return walls_; }
+  // Changes a wall's motion (translation, rotation about origin) or servo control.
+  void set_wall_motion(int index, const Vec3& velocity, const Vec3& angular_velocity,
+                       const Vec3& origin);
+  void set_wall_servo(int index, const Servo& servo);
 
   // --- running ---
   void run(std::int64_t steps);
@@ -74,6 +83,25 @@ class Level {
   Real smallest_rayleigh_time() const;
   // Pairs (global ids) of the current particle list, each unordered pair once.
   std::vector<std::array<GlobalId, 2>> neighbor_pairs() const;
+
+  // --- insertion and outlets (level/level_insert.cpp) ---
+  // Packs particles into a region without overlaps, with each other and with the particles
+  // present; returns the global id of the first and the count (ids are consecutive, largest
+  // particle first). Throws std::runtime_error, inserting nothing, if the target is out of reach.
+  std::pair<GlobalId, Index> pack(const PackSpec& spec);
+  // Registers a stream inserter / an outlet; both run inside run() (the per-step hook), so the
+  // result does not depend on how Python chunks run(). Returns the index.
+  int add_stream(const StreamSpec& spec);
+  int add_outlet(const OutletSpec& spec);
+  std::vector<StreamInserter>& streams() { return streams_; }
+  std::vector<Outlet>& outlets() { return outlets_; }
+  // Deletes owned particles by index (order irrelevant, repeats ignored) keeping the contact
+  // histories of the survivors. remove_particles does it by global id and returns the count.
+  void remove_owned(const std::vector<Index>& indices);
+  Index remove_particles(const std::vector<GlobalId>& ids);
+  // Smallest Rayleigh time (s) of the particles the streams may insert (inf without streams).
+  Real smallest_insertion_rayleigh_time() const;
+  // --- end insertion and outlets ---
 
  private:
   template <class Law>
@@ -100,8 +128,12 @@ class Level {
   Real skin_ = 0;
 
   ParticleStore ps_;
-  std::vector<PlaneWall> walls_;
-  std::vector<Vec3> wall_point_at_build_;
+  std::vector<Wall> walls_;
+  WallPrimitives primitives_;
+  std::vector<Real> wall_shift_;  // how far each wall may have moved since the last build
+  std::vector<Real> wall_reach_;  // largest distance of a wall point that matters from origin
+  std::vector<char> mesh_bins_valid_;
+  Real mesh_bin_margin_ = -1;
   ContactList pairs_, wall_contacts_;
   HistoryCarry pair_carry_, wall_carry_;
   std::vector<Index> origin_;  // per owned particle: index when histories were saved, or -1
@@ -122,6 +154,13 @@ class Level {
   bool lists_valid_ = false;
   bool forces_valid_ = false;
   bool law_prepared_ = false;
+
+  // --- insertion and outlets (level/level_insert.cpp) ---
+  void apply_outlets();
+  void run_streams();
+  std::vector<StreamInserter> streams_;
+  std::vector<Outlet> outlets_;
+  // --- end insertion and outlets ---
 };
 
 }  // namespace grainscale

@@ -1,10 +1,198 @@
-// Level: scheduled insertion and outlets (the per-step hook of run()).
+// Level: packing, scheduled stream insertion, outlets and particle deletion (the per-step hook of
+// run() lives here). See insert/*.hpp for the algorithms and their bookkeeping.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <unordered_set>
+
+#include "core/errors.hpp"
+#include "integrate/time_step.hpp"
 #include "level/level.hpp"
 
 namespace grainscale {
 
+namespace {
+
+// Throws unless the region's bounding box lies inside the domain (on every axis: the placement
+// does not wrap periodic images of the new particles).
+void require_inside(const Region& region, const Domain& domain, const std::string& what) {
+  Vec3 lo, hi;
+  region.bounds(lo, hi);
+  for (int a = 0; a < 3; ++a) {
+    const Real tol = 1e-12 * (domain.hi[a] - domain.lo[a]);
+    if (lo[a] < domain.lo[a] - tol || hi[a] > domain.hi[a] + tol) {
+      std::ostringstream c, v;
+      c << "inside the simulation domain [" << shortest(domain.lo[a]) << ", "
+        << shortest(domain.hi[a]) << "] on axis " << "xyz"[a];
+      v << "[" << shortest(lo[a]) << ", " << shortest(hi[a]) << "]";
+      throw_invalid(what, c.str(), v.str());
+    }
+  }
+}
+
+// Position mapped into the box on periodic axes (owned positions drift out of it between
+// rebuilds by less than a box length).
+Vec3 wrapped(const Domain& d, Vec3 x) {
+  for (int a = 0; a < 3; ++a) {
+    if (!d.periodic[a]) continue;
+    const Real len = d.hi[a] - d.lo[a];
+    if (x[a] < d.lo[a]) x[a] += len;
+    if (x[a] >= d.hi[a]) x[a] -= len;
+  }
+  return x;
+}
+
+}  // namespace
+
+std::pair<GlobalId, Index> Level::pack(const PackSpec& spec) {
+  if (spec.material < 0 || spec.material >= materials_.n_materials())
+    throw_invalid("Pack.material", "a material known to the simulation", spec.material);
+  if ((spec.count >= 0) == (spec.volume_fraction >= 0))
+    throw_invalid("Pack", "given exactly one of count and volume_fraction", "both or neither");
+  if (spec.volume_fraction >= 0 && !(spec.volume_fraction <= 1))
+    throw_invalid("Pack.volume_fraction", "in [0, 1]", spec.volume_fraction);
+  if (!spec.velocity.allFinite())
+    throw_invalid("Pack.velocity", "finite (m/s)", spec.velocity.transpose());
+  if (spec.max_attempts < 1) throw_invalid("Pack.max_attempts", "at least 1", spec.max_attempts);
+  require_inside(spec.region, domain_, "Pack.region");
+
+  Rng rng(spec.seed);
+  const std::vector<Real> radii = pack_radii(spec, rng);
+  if (radii.empty()) return {next_id_, 0};
+  Vec3 lo, hi;
+  spec.region.bounds(lo, hi);
+  OccupancyGrid grid(lo, hi, radii.front(), ps_, domain_);
+  const Placement p = place_in_region(spec, radii, grid, rng);
+
+  const Index n = static_cast<Index>(p.radius.size());
+  std::vector<Real> x(3 * n), v(3 * n);
+  for (Index k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) {
+      x[3 * k + a] = p.position[k][a];
+      v[3 * k + a] = spec.velocity[a];
+    }
+  const std::vector<std::int32_t> mat(n, spec.material);
+  const GlobalId first = add_particles(n, x.data(), v.data(), nullptr, p.radius.data(), mat.data());
+  return {first, n};
+}
+
+int Level::add_stream(const StreamSpec& spec) {
+  if (spec.material < 0 || spec.material >= materials_.n_materials())
+    throw_invalid("Stream.material", "a material known to the simulation", spec.material);
+  StreamInserter s(spec, materials_[spec.material].density);
+  require_inside(s.slab(), domain_,
+                 "Stream.face (with its insertion slab " + shortest(s.thickness()) +
+                     " m deep on the side the velocity points to)");
+  const MaterialProperties& m = materials_[spec.material];
+  const Real t_r =
+      rayleigh_time(spec.radius.min_radius(), m.density, m.youngs_modulus, m.poisson_ratio);
+  if (dt_ > 0 && !force_dt_ && dt_ > kMaxRayleighFraction * t_r) {
+    std::ostringstream c;
+    c << "at most 0.3 x the Rayleigh time of the smallest streamed particle ("
+      << kMaxRayleighFraction * t_r << " s); pass force_time_step=True to override";
+    throw_invalid("Simulation.time_step", c.str(), dt_);
+  }
+  streams_.push_back(std::move(s));
+  return static_cast<int>(streams_.size()) - 1;
+}
+
+int Level::add_outlet(const OutletSpec& spec) {
+  outlets_.emplace_back(spec, time_);
+  return static_cast<int>(outlets_.size()) - 1;
+}
+
+Real Level::smallest_insertion_rayleigh_time() const {
+  Real t = INFINITY;
+  for (const StreamInserter& s : streams_) {
+    const MaterialProperties& m = materials_[s.spec().material];
+    t = std::min(t, rayleigh_time(s.spec().radius.min_radius(), m.density, m.youngs_modulus,
+                                  m.poisson_ratio));
+  }
+  return t;
+}
+
+void Level::remove_owned(const std::vector<Index>& indices) {
+  const Index n = ps_.n_owned();
+  std::vector<char> drop(n, 0);
+  for (Index i : indices) {
+    if (i < 0 || i >= n) throw_invalid("remove_owned.index", "an owned particle index", i);
+    drop[i] = 1;
+  }
+  if (indices.empty()) return;
+  // As in add_particles/rebuild: histories are keyed by global ids while the lists are valid,
+  // and origin_ maps each survivor to the index it had then, so rebuild() restores them.
+  if (lists_valid_) save_histories();
+  lists_valid_ = false;
+  forces_valid_ = false;
+  ps_.clear_ghosts();
+  std::vector<Index> order;
+  order.reserve(n);
+  for (Index i = 0; i < n; ++i)
+    if (!drop[i]) order.push_back(i);
+  ps_.select_owned(order);
+  std::vector<Index> new_origin(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) new_origin[k] = origin_[order[k]];
+  origin_.swap(new_origin);
+}
+
+Index Level::remove_particles(const std::vector<GlobalId>& ids) {
+  const std::unordered_set<GlobalId> wanted(ids.begin(), ids.end());
+  std::vector<Index> indices;
+  for (Index i = 0; i < ps_.n_owned(); ++i)
+    if (wanted.count(ps_.id[i])) indices.push_back(i);
+  remove_owned(indices);
+  return static_cast<Index>(indices.size());
+}
+
 void Level::apply_insertions_and_outlets() {
-  // No inserters or outlets exist yet; the insertion module fills this hook.
+  // Outlets first: removing particles frees room for the inserters of the same step.
+  if (!outlets_.empty()) apply_outlets();
+  if (!streams_.empty()) run_streams();
+}
+
+void Level::apply_outlets() {
+  std::vector<Index> gone;
+  std::vector<char> taken;
+  for (Outlet& outlet : outlets_) {
+    if (!outlet.due(step_)) continue;
+    taken.resize(ps_.n_owned(), 0);
+    std::int64_t count = 0;
+    Real mass = 0;
+    for (Index i = 0; i < ps_.n_owned(); ++i)
+      if (!taken[i] && outlet.spec().region.contains(wrapped(domain_, ps_.position[i]))) {
+        taken[i] = 1;  // a particle inside two outlets is counted by the first
+        gone.push_back(i);
+        ++count;
+        mass += ps_.mass[i];
+      }
+    if (count > 0) outlet.record(time_, count, mass);
+  }
+  if (!gone.empty()) remove_owned(gone);
+}
+
+void Level::run_streams() {
+  const Real tolerance = 1e-6 * dt_;  // a batch due at t_k runs at the first step with t >= t_k
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  for (StreamInserter& s : streams_) {
+    if (!s.schedule(time_, tolerance)) continue;
+    Vec3 lo, hi;
+    s.slab().bounds(lo, hi);
+    OccupancyGrid grid(lo, hi, s.spec().radius.max_radius(), ps_, domain_);
+    x.clear();
+    r.clear();
+    s.place(grid, x, r);
+    if (r.empty()) continue;
+    const Index n = static_cast<Index>(r.size());
+    std::vector<Real> flat(3 * n), v(3 * n);
+    for (Index k = 0; k < n; ++k)
+      for (int a = 0; a < 3; ++a) {
+        flat[3 * k + a] = x[k][a];
+        v[3 * k + a] = s.spec().velocity[a];
+      }
+    const std::vector<std::int32_t> mat(n, s.spec().material);
+    add_particles(n, flat.data(), v.data(), nullptr, r.data(), mat.data());
+  }
 }
 
 }  // namespace grainscale

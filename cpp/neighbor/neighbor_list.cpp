@@ -38,16 +38,29 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, C
   list.touching.assign(list.partner.size(), 0);
 }
 
-void build_wall_list(const ParticleStore& ps, const std::vector<PlaneWall>& walls, Real skin,
-                     ContactList& list) {
+void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
+                     const std::vector<Index>& primitive_first, Real skin, ContactList& list) {
   const Index n = ps.n_owned();
   list.first.resize(n + 1);
   list.partner.clear();
+  std::vector<int> candidates;
   for (Index i = 0; i < n; ++i) {
     list.first[i] = static_cast<Index>(list.partner.size());
-    for (std::size_t w = 0; w < walls.size(); ++w)
-      if (walls[w].closest(ps.position[i]).distance < ps.radius[i] + skin)
-        list.partner.push_back(static_cast<Index>(w));
+    const Vec3& x = ps.position[i];
+    const Real reach = ps.radius[i] + skin;
+    for (std::size_t w = 0; w < walls.size(); ++w) {
+      const Wall& wall = walls[w];
+      if (wall.shape == WallShape::Mesh) {
+        wall.mesh->candidates(x, candidates);
+        std::sort(candidates.begin(), candidates.end());
+        for (int t : candidates)
+          if ((wall.mesh->closest(t, x).point - x).squaredNorm() < reach * reach)
+            list.partner.push_back(primitive_first[w] + t);
+      } else {
+        WallContact c;
+        if (wall.closest(x, c) && c.distance < reach) list.partner.push_back(primitive_first[w]);
+      }
+    }
   }
   list.first[n] = static_cast<Index>(list.partner.size());
   list.history.assign(list.partner.size() * list.history_stride, 0.0);

@@ -5,14 +5,14 @@
 // and owner never depend on the local ordering: histories survive sorting, rebuilds and, under
 // MPI, migration. The list holds pairs with |x_i - x_j| < r_i + r_j + skin at build time and
 // stays valid until some particle has moved more than skin/2 (plus wall motion for walls).
-// WallList: per owned particle, the walls within r_i + skin.
+// Wall list: per owned particle, the wall primitives (walls, mesh triangles) within r_i + skin.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "core/types.hpp"
-#include "geometry/plane_wall.hpp"
+#include "geometry/wall.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "state/particle_store.hpp"
 
@@ -33,8 +33,10 @@ struct ContactList {
 // Builds the particle half list from a grid binned over all local (owned + ghost) particles.
 void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list);
 
-// Builds the particle-wall list.
-void build_wall_list(const ParticleStore& ps, const std::vector<PlaneWall>& walls, Real skin,
-                     ContactList& list);
+// Builds the particle-wall list. Entries are wall primitives: primitive_first[w] + t for
+// triangle t of a mesh wall w, primitive_first[w] for any other wall; per particle they come in
+// increasing primitive order, so the triangles of one mesh are contiguous.
+void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
+                     const std::vector<Index>& primitive_first, Real skin, ContactList& list);
 
 }  // namespace grainscale

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ._validate import vector3
+from ._validate import positive, vector3
 from .materials import Material
 
 
@@ -109,6 +112,218 @@ class Rectangle:
             )
 
 
+@dataclass(frozen=True)
+class Cylinder:
+    """A cylinder: a wall (particles inside or outside it) or a region for packing.
+
+    The axis runs through ``point`` along ``axis``; the cylinder spans [0, length] along the
+    axis from ``point`` (length None: infinite, only as a wall). Open ends: as a wall it has no
+    caps — close it with planes or a mesh.
+
+    Args:
+        point: a point on the axis (m), the start of the axial extent.
+        axis: axis direction (normalised internally).
+        radius: m.
+        length: axial extent (m) or None.
+        inside: as a wall, particles live inside (True) or outside (False).
+        material: the wall's material, or None for a rigid wall.
+        velocity: translation velocity (m/s).
+        angular_velocity: rotation (rad/s) about ``point`` (e.g. a drum spinning about its
+            axis: only its surface velocity changes).
+    """
+
+    point: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    radius: float
+    length: float | None = None
+    inside: bool = True
+    material: Material | None = None
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", vector3("Cylinder", "point", self.point))
+        a = vector3("Cylinder", "axis", self.axis)
+        if np.linalg.norm(a) == 0:
+            raise ValueError(f"Cylinder.axis must be a non-zero vector, got {self.axis}")
+        object.__setattr__(self, "axis", tuple(float(v) for v in np.divide(a, np.linalg.norm(a))))
+        object.__setattr__(self, "radius", positive("Cylinder", "radius", self.radius, " (m)"))
+        if self.length is not None:
+            object.__setattr__(self, "length", positive("Cylinder", "length", self.length, " (m)"))
+        object.__setattr__(self, "velocity", vector3("Cylinder", "velocity", self.velocity))
+        object.__setattr__(
+            self, "angular_velocity", vector3("Cylinder", "angular_velocity", self.angular_velocity)
+        )
+        _check_material("Cylinder", self.material)
+
+    @property
+    def volume(self) -> float:
+        """Volume (m^3) of the finite cylinder."""
+        if self.length is None:
+            raise ValueError("Cylinder.volume needs a finite length")
+        return math.pi * self.radius**2 * self.length
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        """Boolean mask of the points inside the (finite) cylinder."""
+        p = np.asarray(points, dtype=float) - np.asarray(self.point)
+        h = p @ np.asarray(self.axis)
+        rho = p - np.outer(h, self.axis)
+        inside = np.einsum("ij,ij->i", rho, rho) <= self.radius**2
+        if self.length is not None:
+            inside &= (h >= 0) & (h <= self.length)
+        return inside
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A triangle-mesh wall (hoppers, chutes, dies from CAD), two-sided.
+
+    Args:
+        vertices: (V, 3) m.
+        triangles: (T, 3) vertex indices.
+        material: the wall's material, or None for a rigid wall.
+        velocity: translation velocity (m/s).
+        angular_velocity: rotation (rad/s) about ``origin``.
+        origin: rotation centre and torque reference (m); default: the vertex centroid.
+    """
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    material: Material | None = None
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    origin: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        v = np.ascontiguousarray(np.asarray(self.vertices, dtype=float))
+        t = np.ascontiguousarray(np.asarray(self.triangles))
+        if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
+            raise ValueError(f"Mesh.vertices must be a finite (V, 3) array, got shape {v.shape}")
+        if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] == 0:
+            raise ValueError(f"Mesh.triangles must be a (T, 3) array, T > 0, got shape {t.shape}")
+        if not np.issubdtype(t.dtype, np.integer) or t.min() < 0 or t.max() >= len(v):
+            raise ValueError(
+                f"Mesh.triangles must hold vertex indices in [0, {len(v)}), "
+                f"got range [{t.min()}, {t.max()}]"
+            )
+        v.flags.writeable = False
+        t = t.astype(np.int32)
+        t.flags.writeable = False
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "triangles", t)
+        object.__setattr__(self, "velocity", vector3("Mesh", "velocity", self.velocity))
+        object.__setattr__(
+            self, "angular_velocity", vector3("Mesh", "angular_velocity", self.angular_velocity)
+        )
+        origin = v.mean(axis=0) if self.origin is None else self.origin
+        object.__setattr__(self, "origin", vector3("Mesh", "origin", origin))
+        _check_material("Mesh", self.material)
+
+    @classmethod
+    def from_stl(
+        cls,
+        path: str | os.PathLike[str],
+        material: Material | None = None,
+        scale: float = 1.0,
+        **motion: Any,
+    ) -> Mesh:
+        """Read an ASCII or binary STL file (numpy-stl); shared vertices are merged.
+
+        Args:
+            path: the .stl file.
+            material: the wall's material, or None for a rigid wall.
+            scale: factor applied to the coordinates (e.g. 1e-3 for a file in mm).
+            motion: velocity, angular_velocity, origin (see Mesh).
+        """
+        from stl import mesh as stl_mesh
+
+        data = stl_mesh.Mesh.from_file(os.fspath(path))
+        corners = np.asarray(data.vectors, dtype=float).reshape(-1, 3) * float(scale)
+        vertices, inverse = np.unique(corners, axis=0, return_inverse=True)
+        triangles = inverse.reshape(-1, 3)
+        # drop degenerate triangles (repeated vertices)
+        keep = (
+            (triangles[:, 0] != triangles[:, 1])
+            & (triangles[:, 1] != triangles[:, 2])
+            & (triangles[:, 0] != triangles[:, 2])
+        )
+        return cls(vertices=vertices, triangles=triangles[keep], material=material, **motion)
+
+    def to_stl(self, path: str | os.PathLike[str]) -> None:
+        """Write the mesh as a binary STL file."""
+        from stl import mesh as stl_mesh
+
+        out = stl_mesh.Mesh(np.zeros(len(self.triangles), dtype=stl_mesh.Mesh.dtype))
+        out.vectors[:] = self.vertices[self.triangles]
+        out.save(os.fspath(path))
+
+
+@dataclass(frozen=True)
+class Servo:
+    """Force- or stress-controlled wall motion (compression tests, presses).
+
+    Each step the wall moves along ``direction`` (into the material) at
+    gain * (target - load), clamped to max_speed, where load is the force the particles push the
+    wall back with.
+
+    Args:
+        gain: (m/s)/N.
+        max_speed: m/s.
+        target_force: N; or
+        target_stress: Pa, with ``area`` (m^2; default: the rectangle's area).
+        direction: default: the wall's normal (Plane, Rectangle).
+    """
+
+    gain: float
+    max_speed: float
+    target_force: float | None = None
+    target_stress: float | None = None
+    area: float | None = None
+    direction: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        positive("Servo", "gain", self.gain, " ((m/s)/N)")
+        positive("Servo", "max_speed", self.max_speed, " (m/s)")
+        if (self.target_force is None) == (self.target_stress is None):
+            raise ValueError(
+                "Servo needs exactly one of target_force or target_stress, got "
+                f"target_force={self.target_force!r}, target_stress={self.target_stress!r}"
+            )
+        if self.area is not None:
+            positive("Servo", "area", self.area, " (m^2)")
+        if self.direction is not None:
+            d = vector3("Servo", "direction", self.direction)
+            if np.linalg.norm(d) == 0:
+                raise ValueError(f"Servo.direction must be non-zero, got {self.direction}")
+            object.__setattr__(self, "direction", d)
+
+    def force_for(self, wall: Any) -> float:
+        """The target force (N) on ``wall``."""
+        if self.target_force is not None:
+            return float(self.target_force)
+        area = self.area
+        if area is None and isinstance(wall, Rectangle):
+            area = float(np.linalg.norm(np.cross(wall.edge1, wall.edge2)))
+        if area is None:
+            raise ValueError("Servo.area must be given for a target_stress on this wall, got None")
+        return float(self.target_stress) * area  # type: ignore[arg-type]
+
+    def direction_for(self, wall: Any) -> tuple[float, float, float]:
+        if self.direction is not None:
+            return self.direction
+        if isinstance(wall, Plane):
+            return wall.normal
+        if isinstance(wall, Rectangle):
+            n = np.cross(wall.edge1, wall.edge2)
+            return tuple(float(v) for v in n / np.linalg.norm(n))  # type: ignore[return-value]
+        raise ValueError(f"Servo.direction must be given for {type(wall).__name__} walls, got None")
+
+
+def _check_material(owner: str, material: Any) -> None:
+    if material is not None and not isinstance(material, Material):
+        raise ValueError(f"{owner}.material must be a Material or None, got {material!r}")
+
+
 def box_walls(box: Box, material: Material | None = None) -> list[Plane]:
     """Six inward-facing planes closing ``box`` (only on its non-periodic axes)."""
     walls = []
@@ -122,4 +337,4 @@ def box_walls(box: Box, material: Material | None = None) -> list[Plane]:
     return walls
 
 
-Wall = Plane | Rectangle
+Wall = Plane | Rectangle | Cylinder | Mesh

@@ -412,6 +412,36 @@ class VTK:
         steps_ahead = math.ceil((target - float(time)) / float(time_step) - 1e-6)
         return max(step + steps_ahead, earliest)
 
+    def _write_meshes(self, sim: Any, step: int, time: float) -> None:
+        """Mesh walls: one .vtp per snapshot (all meshes, cell data ``wall``) in ``walls.pvd``;
+        written once when no mesh moves."""
+        meshes = sim.mesh_walls() if hasattr(sim, "mesh_walls") else []
+        if not meshes:
+            return
+        moving = any(m["moving"] for m in meshes)
+        if not moving and getattr(self, "_walls_written", False):
+            return
+        vertices, triangles, wall = [], [], []
+        offset = 0
+        for m in meshes:
+            vertices.append(m["vertices"])
+            triangles.append(m["triangles"] + offset)
+            wall.append(np.full(len(m["triangles"]), m["index"], dtype=np.int32))
+            offset += len(m["vertices"])
+        name = f"{self.prefix}_walls_{step:08d}.vtp"
+        write_vtp_mesh(
+            self.directory / name,
+            np.concatenate(vertices),
+            np.concatenate(triangles),
+            cell_data={"wall": np.concatenate(wall)},
+            binary=self.binary,
+            appended=self.appended,
+        )
+        if not hasattr(self, "walls_pvd"):
+            self.walls_pvd = PVDSeries(self.directory / f"{self.prefix}_walls.pvd")
+        self.walls_pvd.add(time, name)
+        self._walls_written = True
+
     def write(self, sim: Any) -> Path:
         """Write the snapshot of ``sim`` at its current step and add it to the .pvd index.
 
@@ -438,6 +468,7 @@ class VTK:
         self.pvd.add(time, name)
         if not self.files or self.files[-1] != path:
             self.files.append(path)
+        self._write_meshes(sim, step, time)
         self._last_step = step
         if self.every is not None:
             dt = self._time_step if self._time_step is not None else getattr(sim, "time_step", 0)

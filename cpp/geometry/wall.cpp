@@ -1,0 +1,47 @@
+#include "geometry/wall.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace grainscale {
+
+Real Wall::advance(Real dt, Real reach) {
+  if (servo.enabled) {
+    const Real load = -force.dot(servo.direction);
+    const Real speed =
+        std::clamp(servo.gain * (servo.target_force - load), -servo.max_speed, servo.max_speed);
+    velocity = speed * servo.direction;
+  }
+  const Real w = angular_velocity.norm();
+  // A plane spinning about its normal or a cylinder about its axis keeps its shape in place:
+  // only the surface velocity changes.
+  bool in_place = false;
+  if (w > 0 && shape == WallShape::Plane)
+    in_place = angular_velocity.cross(normal).norm() <= 1e-12 * w;
+  if (w > 0 && shape == WallShape::Cylinder)
+    in_place = angular_velocity.cross(axis).norm() <= 1e-12 * w &&
+               (origin - point).cross(axis).norm() <= 1e-12 * (origin - point).norm();
+  if (w > 0 && !in_place) {
+    const Eigen::AngleAxis<Real> turn(w * dt, angular_velocity / w);
+    const Eigen::Matrix<Real, 3, 3> R = turn.toRotationMatrix();
+    auto rotate_point = [&](Vec3& p) { p = origin + R * (p - origin); };
+    rotate_point(point);
+    normal = R * normal;
+    edge1 = R * edge1;
+    edge2 = R * edge2;
+    axis = R * axis;
+    if (mesh)
+      for (Vec3& v : mesh->vertices) rotate_point(v);
+  }
+  const Vec3 shift = velocity * dt;
+  if (shift.squaredNorm() > 0) {
+    point += shift;
+    origin += shift;
+    if (mesh)
+      for (Vec3& v : mesh->vertices) v += shift;
+  }
+  return shift.norm() + (in_place ? 0 : w * dt * reach);
+}
+
+}  // namespace grainscale

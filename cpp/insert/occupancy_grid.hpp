@@ -1,0 +1,38 @@
+// OccupancyGrid: the spheres already present around an insertion region, binned in a dense cell
+// hash, to test a candidate sphere for overlaps in O(1). Cells are at least as large as the
+// largest pair distance r_i + r_j that can occur, so the 27-cell stencil is complete; spheres
+// outside the covered box are clamped into its border cells, which keeps the stencil complete.
+#pragma once
+
+#include <vector>
+
+#include "core/types.hpp"
+#include "state/domain.hpp"
+#include "state/particle_store.hpp"
+
+namespace grainscale {
+
+class OccupancyGrid {
+ public:
+  // Covers [lo, hi]; `max_new_radius` is the largest radius that will be tested or added.
+  // The owned particles of `ps` (and, on periodic axes, their images) that can touch the box are
+  // added at once.
+  OccupancyGrid(const Vec3& lo, const Vec3& hi, Real max_new_radius, const ParticleStore& ps,
+                const Domain& domain);
+
+  void add(const Vec3& x, Real r);
+  // Whether the sphere (x, r) overlaps a stored sphere (touching is allowed).
+  bool overlaps(const Vec3& x, Real r) const;
+  std::size_t size() const { return x_.size(); }
+
+ private:
+  int cell_of(const Vec3& x) const;
+  Vec3 lo_ = Vec3::Zero();
+  Real inv_cell_ = 1;
+  int dims_[3] = {1, 1, 1};
+  std::vector<int> head_, next_;
+  std::vector<Vec3> x_;
+  std::vector<Real> r_;
+};
+
+}  // namespace grainscale

@@ -1,0 +1,141 @@
+#include "insert/stream.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "core/errors.hpp"
+
+namespace grainscale {
+
+StreamInserter::StreamInserter(const StreamSpec& spec, Real density)
+    : spec_(spec), density_(density), rng_(spec.seed) {
+  if (!(spec.mass_rate > 0) || !std::isfinite(spec.mass_rate))
+    throw_invalid("Stream.mass_rate", "positive and finite (kg/s)", spec.mass_rate);
+  if (!spec.velocity.allFinite())
+    throw_invalid("Stream.velocity", "finite (m/s)", spec.velocity.transpose());
+  if (!(spec.start >= 0) || !std::isfinite(spec.start))
+    throw_invalid("Stream.start", "non-negative and finite (s)", spec.start);
+  if (!(spec.stop > spec.start)) throw_invalid("Stream.stop", "greater than start (s)", spec.stop);
+  if (!(spec.every >= 0) || !std::isfinite(spec.every))
+    throw_invalid("Stream.every", "positive and finite (s)", spec.every);
+  if (spec.max_attempts < 1) throw_invalid("Stream.max_attempts", "at least 1", spec.max_attempts);
+  const Real r_max = spec.radius.max_radius();
+  if (!spec.face.fits(r_max)) {
+    std::ostringstream c;
+    c << "large enough for the largest particle (diameter " << shortest(2 * r_max) << " m)";
+    throw_invalid("Stream.face", c.str(), spec.face.area());
+  }
+  // The slab lies on the side the velocity points to; with no normal velocity component the face
+  // normal decides and the batch interval must be given.
+  const Real vn = spec.velocity.dot(spec.face.normal());
+  direction_ = vn < 0 ? Vec3(-spec.face.normal()) : spec.face.normal();
+  const Real speed = std::abs(vn);
+  if (spec.every > 0) {
+    every_ = spec.every;
+  } else {
+    if (!(speed > 0))
+      throw_invalid("Stream.every", "given when the velocity has no component across the face (s)",
+                    spec.every);
+    every_ = 2 * r_max / speed;
+  }
+  thickness_ = std::max(4 * r_max, speed * every_);
+  slab_ = spec.face.slab(direction_, thickness_);
+}
+
+bool StreamInserter::schedule(Real time, Real tolerance) {
+  bool due = false;
+  for (;;) {
+    const Real t_k = spec_.start + static_cast<Real>(next_batch_) * every_;
+    if (t_k > time + tolerance) break;
+    if (t_k < spec_.stop) {
+      const Real target = spec_.mass_rate * (std::min(t_k + every_, spec_.stop) - spec_.start);
+      while (scheduled_mass_ < target) {
+        const Real r = spec_.radius.sample(rng_);
+        pending_.push_back(r);
+        scheduled_mass_ += mass_of(r);
+      }
+    }
+    ++next_batch_;
+    due = true;
+  }
+  return due && !pending_.empty();
+}
+
+void StreamInserter::place(OccupancyGrid& grid, std::vector<Vec3>& position,
+                           std::vector<Real>& radius) {
+  // A run of consecutive failures means the slab is full: keep the rest for the next batch
+  // instead of spending attempts on them.
+  const int give_up_after = 32;
+  int failures = 0;
+  std::size_t k = 0;
+  std::vector<Real> still_pending;
+  for (; k < pending_.size() && failures < give_up_after; ++k) {
+    const Real r = pending_[k];
+    bool ok = false;
+    for (int attempt = 0; attempt < spec_.max_attempts && !ok; ++attempt) {
+      const Vec3 x = slab_.sample(rng_, r);
+      if (!grid.overlaps(x, r)) {
+        grid.add(x, r);
+        position.push_back(x);
+        radius.push_back(r);
+        inserted_mass_ += mass_of(r);
+        ++inserted_count_;
+        ok = true;
+      }
+    }
+    if (ok) {
+      failures = 0;
+    } else {
+      ++failures;
+      still_pending.push_back(r);
+    }
+  }
+  still_pending.insert(still_pending.end(), pending_.begin() + k, pending_.end());
+  pending_.swap(still_pending);
+}
+
+Real StreamInserter::requested_mass(Real time) const {
+  const Real t = std::min(time, spec_.stop);
+  return t > spec_.start ? spec_.mass_rate * (t - spec_.start) : 0;
+}
+
+Real StreamInserter::pending_mass() const {
+  Real m = 0;
+  for (Real r : pending_) m += mass_of(r);
+  return m;
+}
+
+std::string StreamInserter::save_state() const {
+  std::ostringstream out;
+  out.precision(std::numeric_limits<Real>::max_digits10);
+  out << "stream-v1 " << next_batch_ << ' ' << scheduled_mass_ << ' ' << inserted_mass_ << ' '
+      << inserted_count_ << ' ' << pending_.size();
+  for (Real r : pending_) out << ' ' << r;
+  out << ' ' << rng_;
+  return out.str();
+}
+
+void StreamInserter::load_state(const std::string& state) {
+  std::istringstream in(state);
+  std::string tag;
+  std::int64_t batch = 0, count = 0;
+  Real scheduled = 0, inserted = 0;
+  std::size_t n = 0;
+  in >> tag >> batch >> scheduled >> inserted >> count >> n;
+  std::vector<Real> pending(in ? n : 0);
+  for (Real& r : pending) in >> r;
+  Rng rng;
+  in >> rng;
+  if (tag != "stream-v1" || in.fail())
+    throw_invalid("Stream state", "text written by get_state() of a stream", "'" + tag + " ...'");
+  next_batch_ = batch;
+  scheduled_mass_ = scheduled;
+  inserted_mass_ = inserted;
+  inserted_count_ = count;
+  pending_.swap(pending);
+  rng_ = rng;
+}
+
+}  // namespace grainscale
