@@ -6,11 +6,13 @@ namespace py = pybind11;
 
 void export_level(py::module_& m);
 void export_helpers(py::module_& m);
+void export_checkpoint(py::module_& m);
 void export_insert(py::module_& m);  // after export_level: adds methods to Level
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "grainscale C++ core (private; use the grainscale package)";
   export_level(m);
   export_helpers(m);
+  export_checkpoint(m);
   export_insert(m);
 }

@@ -6,12 +6,14 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "contact/contact_law.hpp"
 #include "contact/contact_stats.hpp"
 #include "contact/wall_loop.hpp"
 #include "geometry/wall.hpp"
+#include "level/level_state.hpp"
 #include "insert/outlet.hpp"
 #include "insert/pack.hpp"
 #include "insert/stream.hpp"
@@ -67,6 +69,13 @@ class Level {
   void mark_positions_changed();
   void mark_velocities_changed() { forces_valid_ = false; }
 
+  // --- checkpoint (level/level_state.cpp) ---
+  // Everything needed to continue bit-identically; load_state needs the same set-up
+  // (materials, law, walls, inserters), checked through signature().
+  LevelState save_state();
+  void load_state(const LevelState& state);
+  std::string signature() const;
+
   // --- state and diagnostics ---
   ParticleStore& particles() { return ps_; }
   std::int64_t step() const { return step_; }
@@ -113,6 +122,8 @@ class Level {
   std::vector<Interaction> interaction_table() const;
   void save_histories();
   void rebuild();
+  void save_insertion_state(LevelState& state) const;
+  void load_insertion_state(const LevelState& state);
   // Insertion and outlets (level/level_insert.cpp): runs once per step after the drift;
   // adding or removing particles invalidates the lists, so the step rebuilds them.
   void apply_insertions_and_outlets();

@@ -1,0 +1,128 @@
+"""Checkpoint/restart: N steps + checkpoint + restart + N steps equals 2N steps, exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import grainscale as gs
+
+GLASS = gs.Material(density=2500.0, youngs_modulus=1e7, poisson_ratio=0.3, name="glass")
+STEEL = gs.Material(density=7800.0, youngs_modulus=2e8, poisson_ratio=0.3, name="steel")
+FIELDS = ("position", "velocity", "angular_velocity", "force", "torque", "radius", "id")
+
+
+def plate() -> gs.geometry.Mesh:
+    """A triangulated floor plate, 4 x 4 squares."""
+    n, half = 4, 0.012
+    xs = np.linspace(-half, half, n + 1) + 0.01
+    gx, gy = np.meshgrid(xs, xs, indexing="ij")
+    vertices = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+    tris = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            tris += [[a, a + n + 1, a + 1], [a + 1, a + n + 1, a + n + 2]]
+    return gs.geometry.Mesh(vertices, np.array(tris), material=STEEL)
+
+
+def build(law: object) -> gs.Simulation:
+    box = gs.Box(lo=(0, 0, -0.002), hi=(0.02, 0.02, 0.04), periodic=(True, False, False))
+    sim = gs.Simulation(domain=box, time_step=1e-5, skin=2e-4, contact=law)
+    sim.add_wall(plate())
+    sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 1, 0)))
+    sim.add_wall(gs.Plane(point=(0, 0.02, 0), normal=(0, -1, 0), material=GLASS))
+    lid = gs.Rectangle(corner=(0, 0, 0.03), edge1=(0.02, 0, 0), edge2=(0, 0.02, 0))
+    sim.add_wall(lid, servo=gs.geometry.Servo(target_stress=200.0, gain=0.05, max_speed=0.05))
+    return sim
+
+
+def populated(law: object) -> gs.Simulation:
+    sim = build(law)
+    rng = np.random.default_rng(1)
+    r = rng.uniform(0.6e-3, 1.0e-3, 150)
+    region = gs.Box(lo=(0, 0, 0.0), hi=(0.02, 0.02, 0.029))
+    pos = gs.insert.random_in_box(region, r, seed=2)
+    sim.add_particles(position=pos, radius=r, material=GLASS, velocity=(0.0, 0.0, -0.5))
+    return sim
+
+
+def snapshot(sim: gs.Simulation) -> dict[str, np.ndarray]:
+    with sim.particles(writable=False) as p:
+        out = {k: getattr(p, k).copy() for k in FIELDS}
+    for k in range(4):
+        out[f"wall{k}"] = np.concatenate(
+            [sim.wall_force(k), sim.wall_torque(k), sim.wall_position(k)]
+        )
+    out["time"] = np.array([sim.time, sim.step])
+    return out
+
+
+LAWS = [
+    gs.contact.HertzMindlin(restitution=0.5, friction=0.5, rolling=gs.contact.EPSD(0.1, 0.3)),
+    gs.contact.Linear(normal_stiffness=500.0, restitution=0.6, tangential_history="incremental"),
+    gs.contact.EEPA(adhesive_stiffness=50.0, pull_off_force=-2e-5, rolling=gs.contact.CDT(0.05)),
+]
+
+
+@pytest.mark.parametrize("law", LAWS, ids=["hertz+epsd", "linear", "eepa+cdt"])
+def test_restart_is_bit_identical(tmp_path, law):
+    steps = 4000
+    straight = populated(law)
+    straight.run(steps=steps)
+    straight.run(steps=steps)
+    expected = snapshot(straight)
+
+    first = populated(law)
+    first.run(steps=steps)
+    path = tmp_path / "state.h5"
+    first.checkpoint(path)
+
+    again = build(law)
+    again.restart(path)
+    again.run(steps=steps)
+    got = snapshot(again)
+    assert straight.num_contacts() > 30  # a bed with contact histories
+    for key, value in expected.items():
+        assert np.array_equal(got[key], value), f"{key} differs after restart"
+
+
+def test_mismatched_setup_is_refused(tmp_path):
+    sim = populated(LAWS[0])
+    sim.run(steps=10)
+    path = tmp_path / "state.h5"
+    sim.checkpoint(path)
+    other = build(LAWS[1])
+    with pytest.raises(ValueError, match="checkpoint was written for the set-up 'law=hertz\\+epsd"):
+        other.restart(path)
+    fewer_walls = gs.Simulation(
+        domain=gs.Box(lo=(0, 0, -0.002), hi=(0.02, 0.02, 0.04), periodic=(True, False, False)),
+        time_step=1e-5,
+        contact=LAWS[0],
+    )
+    with pytest.raises(ValueError, match="walls=4"):
+        fewer_walls.restart(path)
+
+
+def test_corrupt_files_give_clear_errors(tmp_path):
+    bad = tmp_path / "not_hdf5.h5"
+    bad.write_bytes(b"this is not an HDF5 file")
+    with pytest.raises(ValueError, match="must be a readable HDF5 file"):
+        build(LAWS[0]).restart(bad)
+
+    import h5py
+
+    sim = populated(LAWS[0])
+    sim.run(steps=10)
+    path = tmp_path / "state.h5"
+    sim.checkpoint(path)
+    with h5py.File(path, "a") as f:
+        del f["reals/particles/mass"]
+    with pytest.raises(RuntimeError, match="checkpoint lacks 'particles/mass'"):
+        build(LAWS[0]).restart(path)
+
+    other = tmp_path / "other.h5"
+    with h5py.File(other, "w") as f:
+        f.attrs["format"] = "something else"
+    with pytest.raises(ValueError, match="not a grainscale checkpoint"):
+        build(LAWS[0]).restart(other)
