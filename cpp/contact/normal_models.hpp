@@ -56,7 +56,9 @@ struct HertzNormal {
 
 struct LinearNormal {
   static constexpr const char* kName = "linear";
-  static constexpr int kHistorySize = 0;
+  // The derived k_n (a power per evaluation) is constant over a contact (R*, m* are): it is
+  // computed when the contact starts and kept in the history.
+  static constexpr int kHistorySize = 1;
   struct Pair {
     Real normal_stiffness;      // > 0: given; else derived per contact
     Real tangential_ratio;      // k_t / k_n when k_t is not given
@@ -68,12 +70,16 @@ struct LinearNormal {
     return {in.normal_stiffness, 2.0 / 7.0, in.tangential_stiffness, m.effective_youngs,
             in.characteristic_velocity};
   }
-  static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
+  static NormalState evaluate(const Pair& p, const ContactInput& c, Real* history) {
     Real kn = p.normal_stiffness;
     if (!(kn > 0)) {
-      const Real a = std::sqrt(c.r_eff) * p.effective_youngs;
-      const Real v = p.characteristic_velocity;
-      kn = (16.0 / 15.0) * a * std::pow(15 * c.m_eff * v * v / (16 * a), 0.2);
+      kn = history[0];
+      if (kn == 0) {
+        const Real a = std::sqrt(c.r_eff) * p.effective_youngs;
+        const Real v = p.characteristic_velocity;
+        kn = (16.0 / 15.0) * a * std::pow(15 * c.m_eff * v * v / (16 * a), 0.2);
+        history[0] = kn;
+      }
     }
     const Real kt = p.tangential_stiffness > 0 ? p.tangential_stiffness : p.tangential_ratio * kn;
     return {kn * c.overlap, kn, kn, kt};
@@ -108,19 +114,23 @@ struct EEPANormal {
     const Real k2 = p.unloading_ratio * k1;
     Real& d_max = history[0];
     const Real d = c.overlap;
-    if (d > d_max) d_max = d;
     const Real dn = power(d, n);
-    const Real dpn = (1 - k1 / k2) * power(d_max, n);
     const Real f_load = k1 * dn;
-    const Real f_unload = k2 * (dn - dpn);
-    const Real f_adh = -p.adhesive_stiffness * power(d, p.adhesion_exponent);
     Real f;
-    if (f_unload >= f_load)
+    if (d >= d_max) {
+      d_max = d;  // virgin loading (decided on the overlap, not on rounded branch forces)
       f = f_load;
-    else if (f_unload > f_adh)
-      f = f_unload;
-    else
-      f = f_adh;
+    } else {
+      const Real dpn = (1 - k1 / k2) * power(d_max, n);
+      const Real f_unload = k2 * (dn - dpn);
+      const Real f_adh = -p.adhesive_stiffness * power(d, p.adhesion_exponent);
+      if (f_unload >= f_load)
+        f = f_load;
+      else if (f_unload > f_adh)
+        f = f_unload;
+      else
+        f = f_adh;
+    }
     const Real k_load = n == 1 ? k1 : n * k1 * power(d, n - 1);
     return {p.pull_off_force + f, k_load, k_load, (2.0 / 7.0) * k_load};
   }

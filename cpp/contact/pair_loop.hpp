@@ -25,7 +25,7 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
   const Vec3* w = ps.angular_velocity.data();
   const Real* r = ps.radius.data();
   const Real* im = ps.inv_mass.data();
-  const Real* ii = ps.inv_inertia.data();
+  const Real* irl = ps.inv_rolling_inertia.data();
   const std::int32_t* mat = ps.material.data();
   Vec3* f = ps.force.data();
   Vec3* t = ps.torque.data();
@@ -61,8 +61,7 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
       if constexpr (Law::kRolling) {
         c.w_rel = wi - w[j];
-        c.rolling_inertia =
-            1 / (1 / (1 / ii[i] + ri * ri / imi) + 1 / (1 / ii[j] + rj * rj / im[j]));
+        c.rolling_inertia = 1 / (irl[i] + irl[j]);
       }
       ContactOutput out;
       if constexpr (kUpdate) {

@@ -4,6 +4,7 @@
 //
 // Mesh walls: a sphere near a shared edge or vertex is close to several triangles, but touches
 // the surface once. Per particle and mesh the touching triangles are resolved as follows:
+// of coplanar triangles only the nearest hit counts (a flat patch has one closest point); then
 // every face contact counts; an edge contact counts unless the edge belongs to a triangle with
 // a face contact, and touching the same edge through several triangles counts once; a vertex
 // contact counts unless the vertex belongs to a counted face or edge, once per vertex. When the
@@ -14,6 +15,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "contact/contact_input.hpp"
@@ -35,7 +37,10 @@ struct MeshTouch {
   Index entry;
   int triangle;
   TriangleHit hit;
-  bool counted;
+  bool counted = false;
+  bool dropped = false;
+  Vec3 normal = Vec3::Zero();  // of the triangle
+  Real distance2 = 0;          // squared distance from the sphere centre to the hit
 };
 
 inline bool triangle_has(const std::array<int, 3>& t, int v) {
@@ -43,17 +48,42 @@ inline bool triangle_has(const std::array<int, 3>& t, int v) {
 }
 
 // Marks which of the touching triangles of one mesh count as contacts (rules above).
-inline void resolve_mesh_touches(const TriangleMesh& mesh, const ContactList& list,
-                                 std::vector<MeshTouch>& touches) {
-  for (MeshTouch& m : touches) m.counted = m.hit.feature == 0;
-  // Duplicates of an edge or vertex keep the entry that was touching already (its history).
+// `reach` is the particle radius: the coplanarity tolerance is relative to it (no absolute
+// lengths, so exact scaling holds).
+inline void resolve_mesh_touches(const TriangleMesh& mesh, const ContactList& list, const Vec3& x,
+                                 Real reach, std::vector<MeshTouch>& touches) {
+  // Entries that were touching keep their histories: prefer them among equals.
   auto better = [&](const MeshTouch& a, const MeshTouch& b) {
-    return list.touching[a.entry] > list.touching[b.entry];
+    return list.touching[a.entry] > list.touching[b.entry] ||
+           (list.touching[a.entry] == list.touching[b.entry] && a.entry < b.entry);
   };
+  // 1. Coplanar triangles form one planar patch whose closest point is unique: keep only the
+  //    nearest hit of each plane (a sphere over a flat vertex or edge touches the floor once).
+  for (MeshTouch& m : touches) {
+    const auto& t = mesh.triangles[m.triangle];
+    m.normal = (mesh.vertices[t[1]] - mesh.vertices[t[0]])
+                   .cross(mesh.vertices[t[2]] - mesh.vertices[t[0]])
+                   .normalized();
+    m.distance2 = (x - m.hit.point).squaredNorm();
+    m.dropped = false;
+  }
+  const Real tol = 1e-9;
+  for (MeshTouch& m : touches)
+    for (const MeshTouch& o : touches) {
+      if (&o == &m || m.normal.cross(o.normal).norm() > tol ||
+          std::abs(m.normal.dot(o.hit.point - m.hit.point)) > tol * reach)
+        continue;
+      if (o.distance2 < m.distance2 || (o.distance2 == m.distance2 && better(o, m))) {
+        m.dropped = true;
+        break;
+      }
+    }
+  // 2. Faces count; edges and vertices of counted faces (and vertices of counted edges) are
+  //    shadowed; one contact per edge or vertex.
+  for (MeshTouch& m : touches) m.counted = !m.dropped && m.hit.feature == 0;
   for (int feature = 1; feature <= 2; ++feature) {
-    for (std::size_t k = 0; k < touches.size(); ++k) {
-      MeshTouch& m = touches[k];
-      if (m.hit.feature != feature) continue;
+    for (MeshTouch& m : touches) {
+      if (m.dropped || m.hit.feature != feature) continue;
       bool shadowed = false;
       for (const MeshTouch& o : touches) {
         if (!o.counted) continue;
@@ -103,7 +133,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       ContactInput c{nrm, overlap, ri, ps.mass[i], vrel, dt};
       if constexpr (Law::kRolling) {
         c.w_rel = ps.angular_velocity[i] - wall.angular_velocity;
-        c.rolling_inertia = 1 / ps.inv_inertia[i] + ps.mass[i] * ri * ri;
+        c.rolling_inertia = 1 / ps.inv_rolling_inertia[i];
       }
       const auto& pair = law.pair(ps.material[i], wall.law_material);
       Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
@@ -161,9 +191,9 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       for (Index m = k; m < end; ++m) {
         const int t = list.partner[m] - prims.first[w];
         const TriangleHit hit = mesh.closest(t, xi);
-        if ((xi - hit.point).squaredNorm() < ri * ri) touches.push_back({m, t, hit, false});
+        if ((xi - hit.point).squaredNorm() < ri * ri) touches.push_back({m, t, hit});
       }
-      detail::resolve_mesh_touches(mesh, list, touches);
+      detail::resolve_mesh_touches(mesh, list, xi, ri, touches);
       counted.assign(end - k, 0);
       for (const detail::MeshTouch& m : touches)
         if (m.counted) counted[m.entry - k] = 1;

@@ -119,11 +119,20 @@ void Level::remove_owned(const std::vector<Index>& indices) {
     drop[i] = 1;
   }
   if (indices.empty()) return;
+  // The stored forces stay exact unless a removed particle touched a survivor (forces are then
+  // re-evaluated before the next step). Unknown contacts (lists invalid): re-evaluate.
+  bool touched = !lists_valid_;
+  for (Index i = 0; i < n && !touched; ++i)
+    for (Index k = pairs_.first[i]; k < pairs_.first[i + 1]; ++k) {
+      const Index j = pairs_.partner[k];
+      const Index owner = j < n ? j : ps_.ghost_owner[j - n];
+      if (pairs_.touching[k] && drop[i] != drop[owner]) touched = true;
+    }
+  if (touched) forces_valid_ = false;
   // As in add_particles/rebuild: histories are keyed by global ids while the lists are valid,
   // and origin_ maps each survivor to the index it had then, so rebuild() restores them.
   if (lists_valid_) save_histories();
   lists_valid_ = false;
-  forces_valid_ = false;
   ps_.clear_ghosts();
   std::vector<Index> order;
   order.reserve(n);
@@ -144,10 +153,37 @@ Index Level::remove_particles(const std::vector<GlobalId>& ids) {
   return static_cast<Index>(indices.size());
 }
 
+// Checkpoints: the complete mutable state of every stream (batch counter, masses, pending
+// particles, random engine) and outlet (counters, history) as text; the set-up itself is
+// re-created by the script and checked through signature().
+void Level::save_insertion_state(LevelState& s) const {
+  for (std::size_t k = 0; k < streams_.size(); ++k)
+    s.texts["stream/" + std::to_string(k)] = streams_[k].save_state();
+  for (std::size_t k = 0; k < outlets_.size(); ++k)
+    s.texts["outlet/" + std::to_string(k)] = outlets_[k].save_state();
+}
+
+void Level::load_insertion_state(const LevelState& s) {
+  auto text = [&](const std::string& key) -> const std::string& {
+    const auto it = s.texts.find(key);
+    if (it == s.texts.end()) throw std::runtime_error("checkpoint lacks the state of " + key);
+    return it->second;
+  };
+  for (std::size_t k = 0; k < streams_.size(); ++k)
+    streams_[k].load_state(text("stream/" + std::to_string(k)));
+  for (std::size_t k = 0; k < outlets_.size(); ++k)
+    outlets_[k].load_state(text("outlet/" + std::to_string(k)));
+}
+
 void Level::apply_insertions_and_outlets() {
+  // The step evaluates the forces of every particle right after this hook, so adding or removing
+  // particles here must not mark the forces invalid: that would make the next run() re-evaluate
+  // them (without history update) and the result depend on how run() is chunked.
+  const bool forces_valid = forces_valid_;
   // Outlets first: removing particles frees room for the inserters of the same step.
   if (!outlets_.empty()) apply_outlets();
   if (!streams_.empty()) run_streams();
+  forces_valid_ = forces_valid;
 }
 
 void Level::apply_outlets() {

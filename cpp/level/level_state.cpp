@@ -101,6 +101,8 @@ LevelState Level::save_state() {
   s.reals["particles/mass"].assign(ps_.mass.data(), ps_.mass.data() + nl);
   s.reals["particles/inv_mass"].assign(ps_.inv_mass.data(), ps_.inv_mass.data() + nl);
   s.reals["particles/inv_inertia"].assign(ps_.inv_inertia.data(), ps_.inv_inertia.data() + nl);
+  s.reals["particles/inv_rolling_inertia"].assign(ps_.inv_rolling_inertia.data(),
+                                                  ps_.inv_rolling_inertia.data() + nl);
   put_ints(s, "particles/material", ps_.material.data(), nl);
   put_ints(s, "particles/id", ps_.id.data(), nl);
   put_ints(s, "ghosts/owner", ps_.ghost_owner.data(), ps_.ghost_owner.size());
@@ -146,10 +148,11 @@ void Level::load_state(const LevelState& s) {
   const auto& mass = reals(s, "particles/mass");
   const auto& inv_mass = reals(s, "particles/inv_mass");
   const auto& inv_inertia = reals(s, "particles/inv_inertia");
+  const auto& inv_rolling = reals(s, "particles/inv_rolling_inertia");
   const auto& material = ints(s, "particles/material");
   const auto& id = ints(s, "particles/id");
   if (mass.size() != nl || inv_mass.size() != nl || inv_inertia.size() != nl ||
-      material.size() != nl || id.size() != nl)
+      inv_rolling.size() != nl || material.size() != nl || id.size() != nl)
     throw std::runtime_error("checkpoint particle arrays have different lengths");
   std::vector<Vec3> x(nl), v(nl), w(nl), f(nl), t(nl);
   get(s, "particles/position", x.data(), nl);
@@ -165,6 +168,7 @@ void Level::load_state(const LevelState& s) {
     // add_owned derives 1/m and 1/I; keep the saved bits.
     fresh.inv_mass[k] = inv_mass[k];
     fresh.inv_inertia[k] = inv_inertia[k];
+    fresh.inv_rolling_inertia[k] = inv_rolling[k];
     fresh.force[k] = f[k];
     fresh.torque[k] = t[k];
   }
@@ -246,12 +250,6 @@ void Level::load_state(const LevelState& s) {
   forces_valid_ = true;
 }
 
-void Level::save_insertion_state(LevelState& s) const {
-  if (!streams_.empty() || !outlets_.empty())
-    throw std::runtime_error("checkpoints of streams and outlets are not supported yet");
-  (void)s;
-}
-
-void Level::load_insertion_state(const LevelState& s) { (void)s; }
+// save_insertion_state / load_insertion_state: level/level_insert.cpp
 
 }  // namespace grainscale

@@ -14,6 +14,7 @@ void ParticleStore::resize_all(Index n) {
   mass.resize(n);
   inv_mass.resize(n);
   inv_inertia.resize(n);
+  inv_rolling_inertia.resize(n);
   material.resize(n);
   id.resize(n);
   n_local_ = n;
@@ -29,6 +30,7 @@ void ParticleStore::reserve(Index n) {
   mass.reserve(n);
   inv_mass.reserve(n);
   inv_inertia.reserve(n);
+  inv_rolling_inertia.reserve(n);
   material.reserve(n);
   id.reserve(n);
 }
@@ -47,6 +49,7 @@ void ParticleStore::add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const 
   mass[i] = m;
   inv_mass[i] = 1.0 / m;
   inv_inertia[i] = 1.0 / inertia;
+  inv_rolling_inertia[i] = 1.0 / (inertia + m * r * r);
   material[i] = mat;
   id[i] = gid;
   n_owned_ = i + 1;
@@ -70,6 +73,7 @@ void ParticleStore::add_ghost(Index owner, const Vec3& shift) {
   mass[g] = mass[owner];
   inv_mass[g] = inv_mass[owner];
   inv_inertia[g] = inv_inertia[owner];
+  inv_rolling_inertia[g] = inv_rolling_inertia[owner];
   material[g] = material[owner];
   id[g] = id[owner];
   ghost_owner.push_back(owner);
@@ -114,6 +118,7 @@ void ParticleStore::select_owned(const std::vector<Index>& order) {
   gather(mass, order, sr);
   gather(inv_mass, order, sr);
   gather(inv_inertia, order, sr);
+  gather(inv_rolling_inertia, order, sr);
   gather(material, order, si);
   gather(id, order, sg);
   resize_all(static_cast<Index>(order.size()));

@@ -17,6 +17,8 @@ class ParticleStore {
   // ghost exchange folds back onto their owners.
   SharedArray<Vec3> position, velocity, angular_velocity, force, torque;
   SharedArray<Real> radius, mass, inv_mass, inv_inertia;
+  // 1 / (I + m r^2): the rolling inertia of a pair is 1 / (this_i + this_j) (EPSD damping).
+  SharedArray<Real> inv_rolling_inertia;
   SharedArray<std::int32_t> material;
   SharedArray<GlobalId> id;
   // Ghost bookkeeping (length n_ghost, indexed by ghost - n_owned).

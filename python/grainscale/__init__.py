@@ -6,7 +6,7 @@ laws in :mod:`grainscale.contact`.
 
 from __future__ import annotations
 
-from . import contact, geometry, insert, io, timestep
+from . import contact, dist, geometry, insert, io, timestep
 from .geometry import Box, Plane, Rectangle
 from .materials import Material
 from .simulation import ParticleView, Simulation
@@ -21,6 +21,7 @@ __all__ = [
     "Rectangle",
     "Simulation",
     "contact",
+    "dist",
     "geometry",
     "insert",
     "io",

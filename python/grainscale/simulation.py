@@ -21,6 +21,7 @@ from . import _core
 from ._validate import positive, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo
+from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 
 _VECTOR_FIELDS = ("position", "velocity", "angular_velocity", "force", "torque")
@@ -157,6 +158,8 @@ class Simulation:
         self._wall_spin: dict[int, tuple[float, float, float]] = {}
         self._header_printed = False
         self._rate_clock = (_time.perf_counter(), 0)
+        self._streams: list[StreamHandle] = []  # insertion and outlets
+        self._outlets: list[OutletHandle] = []
 
     # ----------------------------------------------------------------- configuration
     @property
@@ -365,6 +368,50 @@ class Simulation:
             raise ValueError(f"Simulation.output needs an output operation, got {writer!r}")
         self._outputs.append((writer, -1))
 
+    # ----------------------------------------------------------------- insertion and outlets
+    def insert(self, operation: Pack | Stream) -> Any:
+        """Insert particles (see grainscale.insert).
+
+        ``Pack``: places the particles now and returns their global ids (int64 array, largest
+        particle first); raises RuntimeError, inserting nothing, if the target is out of reach.
+        ``Stream``: registers the stream, which inserts inside run(), and returns its
+        :class:`~grainscale.insert.StreamHandle` (requested / inserted / pending mass, counts).
+        """
+        if isinstance(operation, Pack):
+            return operation._insert(self)
+        if isinstance(operation, Stream):
+            handle = operation._insert(self)
+            self._streams.append(handle)
+            return handle
+        raise ValueError(
+            f"Simulation.insert needs a grainscale.insert.Pack or Stream, got {operation!r}"
+        )
+
+    def add_outlet(self, outlet: Outlet) -> OutletHandle:
+        """Register an outlet (particles inside its region are deleted during run()); returns
+        its :class:`~grainscale.insert.OutletHandle` (removed count, mass and history)."""
+        if not isinstance(outlet, Outlet):
+            raise ValueError(f"Simulation.add_outlet needs a grainscale.insert.Outlet, got {outlet!r}")
+        handle = outlet._add(self)
+        self._outlets.append(handle)
+        return handle
+
+    @property
+    def streams(self) -> list[StreamHandle]:
+        """Registered streams, in registration order."""
+        return list(self._streams)
+
+    @property
+    def outlets(self) -> list[OutletHandle]:
+        """Registered outlets, in registration order."""
+        return list(self._outlets)
+
+    def remove_particles(self, ids: np.ndarray | Sequence[int]) -> int:
+        """Delete the particles with these global ids (contact histories of the others are kept);
+        ids not present are ignored. Returns the number deleted."""
+        a = np.asarray(ids, dtype=np.int64).reshape(-1)
+        return int(self._level.remove_particles(a.tolist()))
+
     # ----------------------------------------------------------------- state
     @property
     def step(self) -> int:
@@ -514,19 +561,27 @@ class Simulation:
 
     def _resolve_defaults(self) -> None:
         self._push_interactions()
-        if not self._skin_fixed and self.num_particles > 0:
-            with self.particles(writable=False) as p:
-                d_max = 2.0 * float(p.radius.max())
+        # Streams count as particles to come: their largest diameter for the skin, their
+        # smallest particle's Rayleigh time for the time step.
+        d_stream = max((2.0 * h.stream.radius.max_radius for h in self._streams), default=0.0)
+        if not self._skin_fixed and (self.num_particles > 0 or d_stream > 0):
+            d_max = d_stream
+            if self.num_particles > 0:
+                with self.particles(writable=False) as p:
+                    d_max = max(d_max, 2.0 * float(p.radius.max()))
             self._level.set_skin(0.1 * d_max)
             self._skin_fixed = True
         elif not self._skin_fixed:
             self._level.set_skin(1e-3 * float(np.min(self.domain.length)))
         if self._time_step is None:
-            if self.num_particles == 0:
+            if self.num_particles == 0 and not self._streams:
                 raise ValueError(
                     "Simulation.time_step must be given when there are no particles, got None"
                 )
-            self.time_step = 0.2 * float(self._level.smallest_rayleigh_time())
+            self.time_step = 0.2 * min(
+                float(self._level.smallest_rayleigh_time()),
+                float(self._level.smallest_insertion_rayleigh_time()),
+            )
 
     def run(
         self, steps: int | None = None, until: float | None = None, progress: bool | None = None
