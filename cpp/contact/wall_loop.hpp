@@ -4,7 +4,8 @@
 //
 // Mesh walls: a sphere near a shared edge or vertex is close to several triangles, but touches
 // the surface once. Per particle and mesh the touching triangles are resolved as follows:
-// of coplanar triangles only the nearest hit counts (a flat patch has one closest point); then
+// of coplanar triangles only the nearest hit counts (a flat patch has one closest point); an
+// edge or vertex hit is dropped when a triangle containing it is strictly nearer; then
 // every face contact counts; an edge contact counts unless the edge belongs to a triangle with
 // a face contact, and touching the same edge through several triangles counts once; a vertex
 // contact counts unless the vertex belongs to a counted face or edge, once per vertex. When the
@@ -78,7 +79,24 @@ inline void resolve_mesh_touches(const TriangleMesh& mesh, const ContactList& li
         break;
       }
     }
-  // 2. Faces count; edges and vertices of counted faces (and vertices of counted edges) are
+  // 2. An edge or vertex touch is spurious when a triangle containing that edge or vertex is
+  //    strictly nearer through another feature (the surface's closest point is elsewhere; e.g.
+  //    a gently convex faceted patch touched near an apex).
+  for (MeshTouch& m : touches) {
+    if (m.dropped || m.hit.feature == 0) continue;
+    for (const MeshTouch& o : touches) {
+      if (&o == &m || !(o.distance2 < m.distance2)) continue;
+      const auto& tri = mesh.triangles[o.triangle];
+      const bool contains = m.hit.feature == 1
+                                ? triangle_has(tri, m.hit.a) && triangle_has(tri, m.hit.b)
+                                : triangle_has(tri, m.hit.a);
+      if (contains) {
+        m.dropped = true;
+        break;
+      }
+    }
+  }
+  // 3. Faces count; edges and vertices of counted faces (and vertices of counted edges) are
   //    shadowed; one contact per edge or vertex.
   for (MeshTouch& m : touches) m.counted = !m.dropped && m.hit.feature == 0;
   for (int feature = 1; feature <= 2; ++feature) {

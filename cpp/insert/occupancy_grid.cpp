@@ -88,4 +88,21 @@ bool OccupancyGrid::overlaps(const Vec3& x, Real r) const {
   return false;
 }
 
+bool OccupancyGrid::covers(const Vec3& lo, const Vec3& hi, Real r) const {
+  // A covering sphere j has every point of the box closer than r + r_j <= cell size, hence its
+  // centre lies in the 27-cell stencil of the box centre.
+  const int c = cell_of(0.5 * (lo + hi));
+  const int cx = c % dims_[0], cy = (c / dims_[0]) % dims_[1], cz = c / (dims_[0] * dims_[1]);
+  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dims_[2] - 1); ++z)
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dims_[1] - 1); ++y)
+      for (int xx = std::max(cx - 1, 0); xx <= std::min(cx + 1, dims_[0] - 1); ++xx)
+        for (int k = head_[xx + dims_[0] * (y + dims_[1] * z)]; k >= 0; k = next_[k]) {
+          // Farthest point of the box from the centre: a corner.
+          const Vec3 far = (x_[k] - lo).cwiseAbs().cwiseMax((x_[k] - hi).cwiseAbs());
+          const Real s = r + r_[k];
+          if (far.squaredNorm() < s * s) return true;
+        }
+  return false;
+}
+
 }  // namespace grainscale

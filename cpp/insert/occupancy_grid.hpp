@@ -23,6 +23,9 @@ class OccupancyGrid {
   void add(const Vec3& x, Real r);
   // Whether the sphere (x, r) overlaps a stored sphere (touching is allowed).
   bool overlaps(const Vec3& x, Real r) const;
+  // Whether every centre in the box [lo, hi] (edges at most the cell size) would make a sphere
+  // of radius r overlap one single stored sphere: no sphere of radius >= r fits there any more.
+  bool covers(const Vec3& lo, const Vec3& hi, Real r) const;
   std::size_t size() const { return x_.size(); }
 
  private:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -10,7 +11,100 @@
 namespace grainscale {
 
 namespace {
+
 Real sphere_volume(Real r) { return (4.0 / 3.0) * M_PI * r * r * r; }
+
+// Near jamming almost every uniform trial position is taken. The sampler then restricts trials to
+// voxels of the centres' bounding box that may still hold a free centre for radius rho (the
+// smallest radius still to place: space covered for rho is covered for every larger radius).
+// A voxel is dropped when one stored sphere covers it; a trial that fails in a voxel splits it
+// into its eight children (down to edge h0 / 2^9), which resolves space covered by several
+// spheres together. Voxels are drawn with probability proportional to their volume, then a
+// uniform point in it: uniform over the union of the voxels, which holds every free position, so
+// rejection keeps the statistics of random sequential addition exact (the scheme of Zhang &
+// Torquato, Phys. Rev. E 88, 053312, 2013).
+class VoxelSampler {
+ public:
+  VoxelSampler(const Region& region, Real rho, const OccupancyGrid& grid)
+      : region_(region), grid_(grid), rho_(rho) {
+    Vec3 lo, hi;
+    region.bounds(lo, hi);
+    lo.array() += rho;
+    hi.array() -= rho;
+    const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-300));
+    Real h = 0.5 * rho;
+    const Real max_voxels = 2e6;  // 48 MB of voxel corners at most
+    const Real count = (extent / h).array().ceil().prod();
+    if (count > max_voxels) h *= std::cbrt(count / max_voxels) * 1.01;
+    int dims[3];
+    for (int a = 0; a < 3; ++a) dims[a] = std::max(1, static_cast<int>(std::ceil(extent[a] / h)));
+    for (int l = 0; l < kLevels; ++l) edge_[l] = std::ldexp(h, -l);
+    for (int z = 0; z < dims[2]; ++z)
+      for (int y = 0; y < dims[1]; ++y)
+        for (int x = 0; x < dims[0]; ++x) {
+          const Vec3 v = lo + h * Vec3(x, y, z);
+          if (may_hold_centre(v, 0)) voxels_[0].push_back(v);
+        }
+  }
+
+  bool empty() const {
+    for (const auto& level : voxels_)
+      if (!level.empty()) return false;
+    return true;
+  }
+
+  // A trial centre; (level, slot) name its voxel for refine().
+  Vec3 sample(Rng& rng, int& level, std::size_t& slot) const {
+    Real total = 0;
+    for (int l = 0; l < kLevels; ++l) total += voxels_[l].size() * volume(l);
+    Real u = uniform01(rng) * total;
+    level = 0;
+    while (level + 1 < kLevels &&
+           (voxels_[level].empty() || u >= voxels_[level].size() * volume(level))) {
+      u -= voxels_[level].size() * volume(level);
+      ++level;
+    }
+    const std::size_t n = voxels_[level].size();
+    slot = std::min(static_cast<std::size_t>(uniform01(rng) * n), n - 1);
+    const Real u0 = uniform01(rng), u1 = uniform01(rng), u2 = uniform01(rng);
+    return voxels_[level][slot] + edge_[level] * Vec3(u0, u1, u2);
+  }
+
+  // After a failed trial: replaces the voxel by those of its children that may hold a centre.
+  void refine(int level, std::size_t slot) {
+    auto& list = voxels_[level];
+    const Vec3 v = list[slot];
+    list[slot] = list.back();
+    list.pop_back();
+    if (!may_hold_centre(v, level) || level + 1 == kLevels) {
+      if (level + 1 == kLevels && may_hold_centre(v, level)) list.push_back(v);
+      return;
+    }
+    const Real h = edge_[level + 1];
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 c = v + h * Vec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+      if (may_hold_centre(c, level + 1)) voxels_[level + 1].push_back(c);
+    }
+  }
+
+ private:
+  static constexpr int kLevels = 10;
+  Real volume(int level) const { return edge_[level] * edge_[level] * edge_[level]; }
+  bool may_hold_centre(const Vec3& lo, int level) const {
+    const Real h = edge_[level];
+    // A free centre p in the voxel is within half a diagonal of the voxel centre c, so the sphere
+    // (c, rho - half diagonal) lies inside the region; and no single sphere covers the voxel.
+    const Real inner = rho_ - 0.5 * std::sqrt(3.0) * h;
+    if (inner >= 0 && !region_.contains(lo + Vec3::Constant(0.5 * h), inner)) return false;
+    return !grid_.covers(lo, lo + Vec3::Constant(h), rho_);
+  }
+  const Region& region_;
+  const OccupancyGrid& grid_;
+  Real rho_ = 0;
+  Real edge_[kLevels] = {};
+  std::vector<Vec3> voxels_[kLevels];
+};
+
 }  // namespace
 
 std::vector<Real> pack_radii(const PackSpec& spec, Rng& rng) {
@@ -46,6 +140,10 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
   out.position.reserve(radii.size());
   out.radius.reserve(radii.size());
   Real placed_volume = 0;
+  // Plain uniform trials first; after `direct` failures for one particle the voxel sampler takes
+  // over for the rest of the packing.
+  const int direct = std::min(spec.max_attempts, 5000);
+  std::unique_ptr<VoxelSampler> voxels;
   for (std::size_t k = 0; k < radii.size(); ++k) {
     const Real r = radii[k];
     if (!spec.region.fits(r)) {
@@ -54,15 +152,29 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
       throw std::runtime_error(msg.str());
     }
     bool ok = false;
-    for (int attempt = 0; attempt < spec.max_attempts && !ok; ++attempt) {
+    int attempt = 0;
+    auto accept = [&](const Vec3& x) {
+      grid.add(x, r);
+      out.position.push_back(x);
+      out.radius.push_back(r);
+      placed_volume += sphere_volume(r);
+      ok = true;
+    };
+    for (; !voxels && attempt < direct && !ok; ++attempt) {
       const Vec3 x = spec.region.sample(rng, r);
-      if (!grid.overlaps(x, r)) {
-        grid.add(x, r);
-        out.position.push_back(x);
-        out.radius.push_back(r);
-        placed_volume += sphere_volume(r);
-        ok = true;
-      }
+      if (!grid.overlaps(x, r)) accept(x);
+    }
+    if (!ok && !voxels && attempt < spec.max_attempts)
+      voxels = std::make_unique<VoxelSampler>(
+          spec.region, *std::min_element(radii.begin() + k, radii.end()), grid);
+    for (; voxels && !voxels->empty() && attempt < spec.max_attempts && !ok; ++attempt) {
+      int level = 0;
+      std::size_t slot = 0;
+      const Vec3 x = voxels->sample(rng, level, slot);
+      if (spec.region.contains(x, r) && !grid.overlaps(x, r))
+        accept(x);
+      else
+        voxels->refine(level, slot);
     }
     if (!ok) {
       Real requested = 0;
@@ -71,9 +183,13 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
       std::ostringstream msg;
       msg.precision(3);
       msg << "Pack placed only " << k << " of " << radii.size() << " particles: particle " << k + 1
-          << " (radius " << shortest(r) << " m) found no free position in " << spec.max_attempts
-          << " attempts; the region's volume fraction reached " << placed_volume / v
-          << " of the requested " << requested / v
+          << " (radius " << shortest(r) << " m) found no free position ";
+      if (voxels && voxels->empty())
+        msg << "(the region is saturated)";
+      else
+        msg << "in " << spec.max_attempts << " attempts";
+      msg << "; the region's volume fraction reached " << placed_volume / v << " of the requested "
+          << requested / v
           << ". Nothing was inserted. Random sequential addition jams near 0.38 for equal "
              "spheres (less with particles already inside): lower count/volume_fraction, "
              "enlarge the region, or insert in stages and let the particles settle.";

@@ -322,7 +322,9 @@ class Discrete(_Base):
         if not sum(w) > 0:
             raise ValueError(f"Discrete.weights must not all be zero, got {w!r}")
         if self.fractions not in ("number", "mass"):
-            raise ValueError(f"Discrete.fractions must be 'number' or 'mass', got {self.fractions!r}")
+            raise ValueError(
+                f"Discrete.fractions must be 'number' or 'mass', got {self.fractions!r}"
+            )
         object.__setattr__(self, "radii", r)
         object.__setattr__(self, "weights", w)
 

@@ -402,7 +402,9 @@ class Stream:
         if self.stop is not None:
             stop = positive("Stream", "stop", self.stop, " (s)")
             if not stop > start:
-                raise ValueError(f"Stream.stop must be greater than start = {start!r} s, got {stop!r}")
+                raise ValueError(
+                    f"Stream.stop must be greater than start = {start!r} s, got {stop!r}"
+                )
             object.__setattr__(self, "stop", stop)
         if self.every is not None:
             object.__setattr__(self, "every", positive("Stream", "every", self.every, " (s)"))
@@ -435,14 +437,6 @@ class Stream:
         return self.mass_rate / (self.material.density * area * speed)
 
     def _insert(self, sim: Simulation) -> StreamHandle:
-        phi = self.volume_fraction
-        if math.isfinite(phi) and phi > 0.3:
-            warnings.warn(
-                f"Stream volume fraction {phi:.2f} (mass_rate / (density x face area x normal "
-                "speed)) is high: insertion may not keep up and pending mass may grow; use a "
-                "larger face or a higher speed",
-                stacklevel=3,
-            )
         index = sim._level.add_stream(
             self.face._to_core(),
             self.radius._to_core(),
@@ -455,6 +449,14 @@ class Stream:
             self.every,
             self.max_attempts,
         )
+        phi = self.volume_fraction
+        if math.isfinite(phi) and phi > 0.3:
+            warnings.warn(
+                f"Stream volume fraction {phi:.2f} (mass_rate / (density x face area x normal "
+                "speed)) is high: insertion may not keep up and pending mass may grow; use a "
+                "larger face or a higher speed",
+                stacklevel=3,
+            )
         return StreamHandle(sim._level, int(index), self)
 
 

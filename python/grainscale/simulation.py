@@ -255,6 +255,9 @@ class Simulation:
         """
         mat = -1 if wall.material is None else self.material_index(wall.material)
         lv = self._level
+        if servo is not None:  # validate before the wall exists
+            servo.force_for(wall)
+            servo.direction_for(wall)
         if isinstance(wall, Plane):
             k = lv.add_plane_wall(wall.point, wall.normal, wall.velocity, mat)
         elif isinstance(wall, Rectangle):
@@ -391,7 +394,9 @@ class Simulation:
         """Register an outlet (particles inside its region are deleted during run()); returns
         its :class:`~grainscale.insert.OutletHandle` (removed count, mass and history)."""
         if not isinstance(outlet, Outlet):
-            raise ValueError(f"Simulation.add_outlet needs a grainscale.insert.Outlet, got {outlet!r}")
+            raise ValueError(
+                f"Simulation.add_outlet needs a grainscale.insert.Outlet, got {outlet!r}"
+            )
         handle = outlet._add(self)
         self._outlets.append(handle)
         return handle

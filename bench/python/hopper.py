@@ -1,0 +1,564 @@
+"""Side-by-side 'hopper' benchmark: grainscale against LIGGGHTS 3.8 on one core.
+
+The case (identical physics in both codes, see hopper_case.py for the exact definition): a
+conical hopper read from the same binary STL by both codes (3840 triangles: a 48-sided cylinder,
+R = 40 mm, on a 30-degree cone to an open outlet of radius 10 mm), N spheres (d = 2 mm,
+rho = 2500 kg/m^3) on a seeded jittered lattice inside it, outlet open from the start: the
+packing collapses under gravity and discharges; particles are deleted when they cross the box
+floor 3 mm below the outlet. Hertz-Mindlin with tangential history (E = 1e7 Pa, nu = 0.3,
+e = 0.5, mu = 0.5; the mesh of the particle material), dt = 1e-5 s, skin 0.2 mm.
+
+The STL and the initial state are generated once per size and fed to both codes (LIGGGHTS:
+data file + ``fix mesh/surface`` + ``fix wall/gran ... mesh``; grainscale: .npz +
+``Mesh.from_stl`` + ``add_wall``). Each code runs in its own subprocess (peak RSS from
+``os.wait4``); the two codes alternate for ``--repeats`` rounds because the machine is noisy.
+Cost = wall-clock of the run only (LIGGGHTS' "Loop time"; the sum of grainscale's
+``Simulation.run`` calls, made in chunks of ``sample_every`` steps to sample the state like the
+LIGGGHTS thermo output) divided by steps x the time-averaged particle count (trapezoid rule over
+the samples, the same estimator for both codes). Because the machine is shared, the same ratio
+is also given with CPU time (grainscale: process time of the run calls; LIGGGHTS: process CPU
+time minus that of a 0-step run of the same input). The table shows medians, the median of the
+per-round ratio grainscale/LIGGGHTS, peak RSS and, as a cross-check of the physics, particles
+remaining, discharged mass, mean height and kinetic energy at the end and along the run.
+Raw numbers go to bench/results/hopper.json (entries of other sizes already there are kept).
+
+Usage: python bench/python/hopper.py [--sizes 50000] [--steps 20000] [--repeats 2]
+                                     [--quick] [--only grainscale|liggghts]
+                                     [--deletion domain|outlet[:every]]
+  --quick: 10k particles, 8000 steps, 1 round (a smoke test of the whole pipeline).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime as dt
+import json
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from hopper_case import (
+    HopperCase,
+    hopper_mesh,
+    initial_state,
+    liggghts_input,
+    mean_count,
+    write_binary_stl,
+    write_liggghts_data,
+)
+from settle import (
+    BenchmarkError,
+    check_grainscale,
+    ensure_liggghts,
+    machine_info,
+    parse_liggghts_log,
+    single_thread_env,
+)
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+WORKER = HERE / "hopper_grainscale_worker.py"
+DEFAULT_OUTPUT = REPO / "bench" / "results" / "hopper.json"
+CODES = ("grainscale", "liggghts")
+THERMO_KEYS = ("Step", "atoms", "ke", "rke", "zmean")
+BREAKDOWN_RE = re.compile(r"^(Pair|Neigh|Comm|Outpt|Other)\s+time \(%\) = ([0-9.eE+-]+)", re.M)
+
+
+@dataclass
+class RunResult:
+    """One run of one code on one case."""
+
+    code: str
+    round: int
+    ns_per_particle_step: float
+    run_seconds: float
+    cpu_ns_per_particle_step: float
+    cpu_seconds: float
+    mean_particles: float
+    maxrss_kib: int
+    n_final: int
+    ke_trans_final: float
+    ke_rot_final: float
+    mean_z_final: float
+    neighbor_builds: int
+    loadavg_1min: float
+    samples: list[dict[str, float]]
+    warnings: list[str] = field(default_factory=list)
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------------------------
+# set-up
+
+
+def prepare_inputs(case: HopperCase, workdir: Path) -> None:
+    """Generate the hopper STL and the initial state once and write them for both codes."""
+    vertices, triangles = hopper_mesh(case)
+    write_binary_stl(workdir / "hopper.stl", vertices, triangles, f"N = {case.n_particles}")
+    pos, vel = initial_state(case)
+    write_liggghts_data(workdir / "data.hopper", case, pos, vel)
+    script = liggghts_input(case, "../data.hopper", "../hopper.stl")
+    (workdir / "in.hopper").write_text(script)
+    setup_only = script.replace(f"run             {case.steps}", "run             0")
+    assert setup_only != script
+    (workdir / "in.hopper_setup").write_text(setup_only)
+    np.savez(workdir / "state.npz", position=pos, velocity=vel)
+    (workdir / "case.json").write_text(json.dumps(dataclasses.asdict(case)))
+
+
+def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int, float]:
+    """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB,
+    CPU seconds (user + system) of the process)."""
+    with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
+        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, int(usage.ru_maxrss), usage.ru_utime + usage.ru_stime
+
+
+def liggghts_setup_cpu(exe: str, workdir: Path) -> float:
+    """CPU seconds of a LIGGGHTS process that sets the case up and runs 0 steps (read_data,
+    mesh import, first neighbour lists): subtracted from the CPU time of the real runs."""
+    rundir = Path(tempfile.mkdtemp(prefix="liggghts_setup_", dir=workdir))
+    try:
+        cmd = [exe, "-in", "../in.hopper_setup", "-log", "log.hopper"]
+        rc, _, cpu = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0:
+            raise _failure("liggghts (setup only)", rc, rundir, "log.hopper", "stdout.txt")
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    return cpu
+
+
+def _tail(path: Path, lines: int = 25) -> str:
+    if not path.exists():
+        return ""
+    return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+
+
+def _failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
+    parts = [f"{code} failed with exit code {rc} in {rundir}"]
+    parts += [f"--- {name}:\n{_tail(rundir / name)}" for name in files if (rundir / name).exists()]
+    return BenchmarkError("\n".join(parts))
+
+
+# ---------------------------------------------------------------------------------------------
+# running one code
+
+
+def run_liggghts(
+    exe: str, case: HopperCase, workdir: Path, rnd: int, setup_cpu: float
+) -> RunResult:
+    rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [exe, "-in", "../in.hopper", "-log", "log.hopper"]
+        rc, rss, cpu = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0:
+            raise _failure("liggghts", rc, rundir, "log.hopper", "stdout.txt", "stderr.txt")
+        text = (rundir / "log.hopper").read_text(errors="replace")
+        log = parse_liggghts_log(text)
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    if log["procs"] != 1 or log["steps"] != case.steps:
+        raise BenchmarkError(f"unexpected LIGGGHTS loop line: {log}")
+    samples = [
+        {"Step": r["Step"], "atoms": r["Atoms"], "ke": r["KinEng"], "rke": r["rke"],
+         "zmean": r["zmean"]}
+        for r in log["thermo"]
+    ]  # fmt: skip
+    if samples[-1]["Step"] != case.steps:
+        raise BenchmarkError(f"LIGGGHTS thermo output ends at step {samples[-1]['Step']}")
+    loop = float(log["loop_seconds"])
+    n_mean = mean_count([s["Step"] for s in samples], [s["atoms"] for s in samples])
+    last = samples[-1]
+    return RunResult(
+        code="liggghts",
+        round=rnd,
+        ns_per_particle_step=loop / (case.steps * n_mean) * 1e9,
+        run_seconds=loop,
+        cpu_ns_per_particle_step=(cpu - setup_cpu) / (case.steps * n_mean) * 1e9,
+        cpu_seconds=cpu - setup_cpu,
+        mean_particles=n_mean,
+        maxrss_kib=rss,
+        n_final=int(last["atoms"]),
+        ke_trans_final=float(last["ke"]),
+        ke_rot_final=float(last["rke"]),
+        mean_z_final=float(last["zmean"]),
+        neighbor_builds=int(log["neighbor_builds"] or -1),
+        loadavg_1min=load,
+        samples=samples,
+        warnings=log["warnings"],
+        extra={
+            "version": log["version"],
+            "memory_per_proc_mbytes": log["memory_mbytes"],
+            "dangerous_builds": log["dangerous_builds"],
+            "time_breakdown_seconds": {  # Other: fixes (mesh wall, integration, gravity)
+                m.group(1).lower(): float(m.group(2)) for m in BREAKDOWN_RE.finditer(text)
+            },
+        },
+    )
+
+
+def run_grainscale(case: HopperCase, workdir: Path, rnd: int, deletion: str) -> RunResult:
+    rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [
+            sys.executable,
+            str(WORKER),
+            "--case",
+            str(workdir / "case.json"),
+            "--state",
+            str(workdir / "state.npz"),
+            "--stl",
+            str(workdir / "hopper.stl"),
+            "--deletion",
+            deletion,
+            "--output",
+            "result.json",
+        ]
+        rc, rss, _ = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0 or not (rundir / "result.json").exists():
+            raise _failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
+        res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
+        stderr = (rundir / "stderr.txt").read_text(errors="replace")
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    seconds = float(res.pop("run_seconds"))
+    cpu = float(res.pop("cpu_seconds"))
+    samples = res.pop("samples")
+    n_mean = mean_count([s["Step"] for s in samples], [s["atoms"] for s in samples])
+    return RunResult(
+        code="grainscale",
+        round=rnd,
+        ns_per_particle_step=seconds / (case.steps * n_mean) * 1e9,
+        run_seconds=seconds,
+        cpu_ns_per_particle_step=cpu / (case.steps * n_mean) * 1e9,
+        cpu_seconds=cpu,
+        mean_particles=n_mean,
+        maxrss_kib=rss,
+        n_final=int(res.pop("n_final")),
+        ke_trans_final=float(res.pop("ke_trans_final")),
+        ke_rot_final=float(res.pop("ke_rot_final")),
+        mean_z_final=float(res.pop("mean_z_final")),
+        neighbor_builds=int(res.pop("neighbor_builds")),
+        loadavg_1min=load,
+        samples=samples,
+        warnings=[ln.strip() for ln in stderr.splitlines() if "warn" in ln.lower()],
+        extra=res | {"deletion": deletion},
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# benchmark driver and report
+
+
+def bench_size(
+    case: HopperCase,
+    codes: list[str],
+    repeats: int,
+    liggghts_exe: str | None,
+    deletion: str,
+    keep: bool,
+) -> dict[str, Any]:
+    workdir = Path(tempfile.mkdtemp(prefix=f"grainscale_hopper_{case.n_particles}_"))
+    try:
+        prepare_inputs(case, workdir)
+        runs: list[RunResult] = []
+        setup_cpu = liggghts_setup_cpu(liggghts_exe, workdir) if liggghts_exe else 0.0
+        for rnd in range(repeats):
+            for code in codes:
+                print(f"  round {rnd + 1}/{repeats}: {code:<10s} ... ", end="", flush=True)
+                if code == "liggghts":
+                    assert liggghts_exe is not None
+                    res = run_liggghts(liggghts_exe, case, workdir, rnd, setup_cpu)
+                else:
+                    res = run_grainscale(case, workdir, rnd, deletion)
+                runs.append(res)
+                print(
+                    f"{res.ns_per_particle_step:8.1f} ns/particle-step "
+                    f"(CPU {res.cpu_ns_per_particle_step:.1f}), "
+                    f"{res.run_seconds:7.2f} s, peak RSS {res.maxrss_kib / 1024:7.1f} MiB, "
+                    f"{case.n_particles - res.n_final} discharged, load {res.loadavg_1min:.1f}"
+                    + (f", {len(res.warnings)} warning line(s)" if res.warnings else ""),
+                    flush=True,
+                )
+    finally:
+        if keep:
+            print(f"  inputs kept in {workdir}")
+        else:
+            shutil.rmtree(workdir, ignore_errors=True)
+    return {
+        "timestamp": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "case": case.to_dict(),
+        "repeats": repeats,
+        "liggghts_setup_cpu_seconds": setup_cpu,
+        "grainscale_deletion": deletion,
+        "runs": [dataclasses.asdict(r) for r in runs],
+        "summary": summarize(case, runs),
+    }
+
+
+def summarize(case: HopperCase, runs: list[RunResult]) -> dict[str, Any]:
+    summary: dict[str, Any] = {}
+    m = case.particle_mass
+    for code in CODES:
+        mine = [r for r in runs if r.code == code]
+        if not mine:
+            continue
+        ns = [r.ns_per_particle_step for r in mine]
+        first = mine[0]  # both codes are deterministic on one core: the physics of run 1
+        summary[code] = {
+            "median_ns_per_particle_step": statistics.median(ns),
+            "min_ns_per_particle_step": min(ns),
+            "max_ns_per_particle_step": max(ns),
+            "median_cpu_ns_per_particle_step": statistics.median(
+                r.cpu_ns_per_particle_step for r in mine
+            ),
+            "median_run_seconds": statistics.median(r.run_seconds for r in mine),
+            "mean_particles": first.mean_particles,
+            "peak_rss_mib": max(r.maxrss_kib for r in mine) / 1024.0,
+            "n_final": first.n_final,
+            "discharged": case.n_particles - first.n_final,
+            "discharged_mass_kg": (case.n_particles - first.n_final) * m,
+            "ke_trans_final": first.ke_trans_final,
+            "ke_rot_final": first.ke_rot_final,
+            "mean_z_final": first.mean_z_final,
+            "neighbor_builds": first.neighbor_builds,
+            "deterministic": all(r.samples == first.samples for r in mine),
+            "neighbor_fraction": statistics.median(_neighbor_fraction(r) for r in mine),
+        }
+        baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
+        if baseline:  # grainscale: interpreter, imports, initial state
+            summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
+    by_round: dict[int, dict[str, RunResult]] = {}
+    for r in runs:
+        by_round.setdefault(r.round, {})[r.code] = r
+    pairs = [d for d in by_round.values() if len(d) == 2]
+    ratios = [
+        d["grainscale"].ns_per_particle_step / d["liggghts"].ns_per_particle_step for d in pairs
+    ]
+    cpu_ratios = [
+        d["grainscale"].cpu_ns_per_particle_step / d["liggghts"].cpu_ns_per_particle_step
+        for d in pairs
+    ]
+    if ratios:
+        gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
+        summary["ratio_grainscale_over_liggghts"] = {
+            "per_round": ratios,
+            "median": statistics.median(ratios),
+            "target": 0.5,
+        }
+        summary["cpu_time_ratio_grainscale_over_liggghts"] = {
+            "per_round": cpu_ratios,
+            "median": statistics.median(cpu_ratios),
+        }
+        gs_first = next(r for r in runs if r.code == "grainscale")
+        lig_first = next(r for r in runs if r.code == "liggghts")
+        summary["cross_check"] = {
+            "discharged_rel_diff": _rel(gs_sum["discharged"], lig_sum["discharged"]),
+            "mean_particles_rel_diff": _rel(gs_sum["mean_particles"], lig_sum["mean_particles"]),
+            "mean_z_final_diff_m": gs_sum["mean_z_final"] - lig_sum["mean_z_final"],
+            "ke_trans_final_rel_diff": _rel(gs_sum["ke_trans_final"], lig_sum["ke_trans_final"]),
+            "ke_rot_final_rel_diff": _rel(gs_sum["ke_rot_final"], lig_sum["ke_rot_final"]),
+            "history": compare_histories(gs_first.samples, lig_first.samples),
+        }
+    return summary
+
+
+def _neighbor_fraction(r: RunResult) -> float:
+    """Share of the run time spent building neighbour lists (grainscale: whole rebuilds with
+    sorting and wall lists; LIGGGHTS: 'Neigh time', the mesh neighbour lists are in 'Other')."""
+    if r.code == "grainscale":
+        seconds = float(r.extra.get("rebuild_seconds", float("nan")))
+    else:
+        seconds = float(r.extra.get("time_breakdown_seconds", {}).get("neigh", float("nan")))
+    return seconds / r.run_seconds
+
+
+def _rel(a: float, b: float) -> float:
+    return a / b - 1.0 if b else float("nan")
+
+
+def compare_histories(
+    gs_samples: list[dict[str, float]], lig_samples: list[dict[str, float]]
+) -> list[dict[str, float]]:
+    """Side-by-side samples at the steps both codes recorded."""
+    lig = {int(s["Step"]): s for s in lig_samples}
+    rows = []
+    for g in gs_samples:
+        step = int(g["Step"])
+        if step not in lig:
+            continue
+        row = {"Step": step}
+        for key in THERMO_KEYS[1:]:
+            row[f"grainscale_{key}"] = g[key]
+            row[f"liggghts_{key}"] = lig[step][key]
+        rows.append(row)
+    return rows
+
+
+def print_table(entry: dict[str, Any]) -> None:
+    case, s = entry["case"], entry["summary"]
+    print(
+        f"\nN = {case['n_particles']}  ({case['n_triangles']} triangles, {case['steps']} steps, "
+        f"{entry['repeats']} round(s), grainscale deletion: {entry['grainscale_deletion']})"
+    )
+    print(
+        f"  {'code':<11s} {'ns/p-step':>10s} {'min':>8s} {'max':>8s} {'peak RSS':>10s} "
+        f"{'mean N':>9s} {'left':>7s} {'disch. g':>9s} {'mean z mm':>10s} {'KE J':>10s} "
+        f"{'rot KE J':>10s} {'nbuilds':>8s}"
+    )
+    for code in CODES:
+        if code not in s:
+            continue
+        c = s[code]
+        print(
+            f"  {code:<11s} {c['median_ns_per_particle_step']:10.1f} "
+            f"{c['min_ns_per_particle_step']:8.1f} {c['max_ns_per_particle_step']:8.1f} "
+            f"{c['peak_rss_mib']:6.1f} MiB {c['mean_particles']:9.1f} {c['n_final']:7d} "
+            f"{c['discharged_mass_kg'] * 1e3:9.3f} {c['mean_z_final'] * 1e3:10.4f} "
+            f"{c['ke_trans_final']:10.4e} {c['ke_rot_final']:10.3e} {c['neighbor_builds']:8d}"
+        )
+    shares = ", ".join(f"{code} {s[code]['neighbor_fraction']:.0%}" for code in CODES if code in s)
+    print(f"  share of run time in neighbour-list builds: {shares}")
+    if "rss_before_sim_mib" in s.get("grainscale", {}):
+        print(
+            f"  (grainscale peak RSS includes {s['grainscale']['rss_before_sim_mib']:.1f} MiB of "
+            "Python, numpy, grainscale and the initial-state arrays before the Simulation is built)"
+        )
+    if "ratio_grainscale_over_liggghts" in s:
+        r, x = s["ratio_grainscale_over_liggghts"], s["cross_check"]
+        per_round = ", ".join(f"{v:.3f}" for v in r["per_round"])
+        print(
+            f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round}); "
+            f"target <= {r['target']}"
+        )
+        c = s["cpu_time_ratio_grainscale_over_liggghts"]
+        per_round = ", ".join(f"{v:.3f}" for v in c["per_round"])
+        print(
+            f"  same with CPU time instead of wall clock: median {c['median']:.3f}  ({per_round}); "
+            f"CPU ns/p-step gs {s['grainscale']['median_cpu_ns_per_particle_step']:.1f}, "
+            f"lig {s['liggghts']['median_cpu_ns_per_particle_step']:.1f}"
+        )
+        print(
+            f"  cross-check: discharged {x['discharged_rel_diff']:+.2%}, "
+            f"mean N {x['mean_particles_rel_diff']:+.3%}, "
+            f"mean z diff {x['mean_z_final_diff_m'] * 1e6:+.1f} um, "
+            f"KE {x['ke_trans_final_rel_diff']:+.2%}, rot KE {x['ke_rot_final_rel_diff']:+.2%}"
+        )
+        hist = x["history"]
+        picks = {hist[round(f * (len(hist) - 1))]["Step"] for f in (0, 0.25, 0.5, 0.75, 1)}
+        print(f"  {'step':>8s} {'left gs/lig':>15s} {'mean z mm gs/lig':>21s} {'KE J gs/lig':>23s}")
+        for row in hist:
+            if row["Step"] in picks:
+                print(
+                    f"  {row['Step']:8d} "
+                    f"{row['grainscale_atoms']:7.0f}/{row['liggghts_atoms']:<7.0f} "
+                    f"{row['grainscale_zmean'] * 1e3:10.4f}/{row['liggghts_zmean'] * 1e3:<10.4f} "
+                    f"{row['grainscale_ke']:11.4e}/{row['liggghts_ke']:<11.4e}"
+                )
+    for code in CODES:
+        if code in s and not s[code]["deterministic"]:
+            print(f"  note: {code} runs of this size did not reproduce each other exactly")
+    warned = {w for run in entry["runs"] for w in run["warnings"]}
+    for w in sorted(warned):
+        print(f"  warning: {w}")
+
+
+def write_results(path: Path, entries: dict[str, dict[str, Any]], args: argparse.Namespace) -> None:
+    """Merge the new per-size entries into ``path`` (other sizes already there are kept)."""
+    data: dict[str, Any] = {}
+    if path.exists():
+        try:
+            data = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            data = {}
+    data["benchmark"] = "hopper"
+    data["machine"] = machine_info()
+    data["last_command"] = {
+        "sizes": args.sizes,
+        "steps": args.steps,
+        "repeats": args.repeats,
+        "quick": args.quick,
+        "deletion": args.deletion,
+    }
+    data.setdefault("sizes", {}).update(entries)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--sizes", type=int, nargs="+", default=None, help="default: 50000")
+    parser.add_argument("--steps", type=int, default=None, help="default: 20000")
+    parser.add_argument("--repeats", type=int, default=None, help="default: 2")
+    parser.add_argument("--quick", action="store_true", help="10k particles, 8000 steps, 1 round")
+    parser.add_argument("--only", choices=CODES, default=None, help="run only one code")
+    parser.add_argument(
+        "--deletion",
+        default="domain",
+        help="how grainscale deletes discharged particles: 'domain' (lost at the box floor at "
+        "the next list rebuild, as LIGGGHTS) or 'outlet[:every]' (a gs.insert.Outlet slab at "
+        "the floor, checked every 'every' steps)",
+    )
+    parser.add_argument("--seed", type=int, default=HopperCase.seed)
+    parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
+    parser.add_argument("--keep", action="store_true", help="keep the generated input files")
+    args = parser.parse_args(argv)
+    quick = args.quick
+    args.sizes = args.sizes or ([10_000] if quick else [50_000])
+    args.steps = args.steps or (8000 if quick else 20_000)
+    args.repeats = args.repeats or (1 if quick else 2)
+    if min(args.sizes) < 1 or args.steps < 1 or args.repeats < 1:
+        parser.error("--sizes, --steps and --repeats must be positive")
+    if not (args.deletion == "domain" or args.deletion.startswith("outlet")):
+        parser.error(f"--deletion must be 'domain' or 'outlet[:every]', got {args.deletion!r}")
+
+    codes = [args.only] if args.only else list(CODES)
+    try:
+        liggghts_exe = ensure_liggghts() if "liggghts" in codes else None
+        if "grainscale" in codes:
+            check_grainscale()
+        entries: dict[str, dict[str, Any]] = {}
+        for n in args.sizes:
+            case = HopperCase(n_particles=n, steps=args.steps, seed=args.seed)
+            print(
+                f"hopper N = {n}: {case.n_triangles} triangles, R = {case.hopper_radius * 1e3:g} "
+                f"mm, outlet r = {case.outlet_radius * 1e3:g} mm, {case.steps} steps",
+                flush=True,
+            )
+            try:
+                entry = bench_size(
+                    case, codes, args.repeats, liggghts_exe, args.deletion, args.keep
+                )
+            except ValueError as exc:  # e.g. more particles than the hopper holds
+                raise BenchmarkError(str(exc)) from exc
+            entries[str(n)] = entry
+            write_results(args.output, entries, args)  # after every size: partial results survive
+    except BenchmarkError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except subprocess.CalledProcessError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    for entry in entries.values():
+        print_table(entry)
+    print(f"\nraw numbers: {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,147 @@
+"""grainscale side of the 'hopper' benchmark; hopper.py runs it in a separate process.
+
+Running it alone keeps its peak memory (ru_maxrss) separate from the driver and from LIGGGHTS.
+It reads the case parameters (JSON), the initial positions/velocities (.npz) and the hopper STL
+written by the driver, builds the same case as the LIGGGHTS input (see hopper_case.py), runs it
+in chunks of ``sample_every`` steps (the LIGGGHTS thermo interval) and samples particle count,
+kinetic energy and mean height between chunks. Only the ``Simulation.run`` calls are timed
+(wall clock and process CPU time).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from hopper_case import HopperCase
+
+
+def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> dict[str, Any]:
+    """Build the case with the grainscale API, run it and return timings and observables."""
+    import grainscale as gs  # imported here so that import time is outside the timed section
+
+    state = np.load(state_file)
+    position = np.ascontiguousarray(state["position"], dtype=np.float64)
+    velocity = np.ascontiguousarray(state["velocity"], dtype=np.float64)
+    rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+    t_setup = time.perf_counter()
+    mat = gs.Material(
+        density=case.density,
+        youngs_modulus=case.youngs_modulus,
+        poisson_ratio=case.poisson_ratio,
+        name="glass",
+    )
+    law = gs.contact.HertzMindlin(
+        restitution=case.restitution,
+        friction=case.friction,
+        limit_force=False,  # LIGGGHTS default: limitForce off
+        tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
+        tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
+    )
+    lo, hi = case.box_lo, case.box_hi
+    sim = gs.Simulation(
+        domain=gs.Box(lo=lo, hi=hi, periodic=(False, False, False)),
+        contact=law,
+        gravity=(0.0, 0.0, -case.gravity),
+        time_step=case.time_step,
+        skin=case.skin,
+    )
+    sim.add_particles(
+        position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
+    )
+    mesh = gs.geometry.Mesh.from_stl(stl_file, material=mat)  # hopper of the particle material
+    sim.add_wall(mesh)
+    outlet = None
+    if deletion.startswith("outlet"):
+        # a slab at the box floor: particles are deleted as soon as their centre is within 1 mm
+        # of the floor (checked every `every` steps) instead of at the next list rebuild
+        every = int(deletion.partition(":")[2] or 1)
+        region = gs.Box(lo=(lo[0], lo[1], lo[2] - 1.0), hi=(hi[0], hi[1], lo[2] + 1.0e-3))
+        outlet = sim.add_outlet(gs.insert.Outlet(region, every=every))
+    setup_seconds = time.perf_counter() - t_setup
+
+    samples: list[dict[str, float]] = [_sample(sim)]
+    run_seconds = cpu_seconds = 0.0
+    while sim.step < case.steps:
+        n = min(case.sample_every, case.steps - sim.step)
+        t0, c0 = time.perf_counter(), time.process_time()
+        sim.run(steps=n, progress=False)
+        run_seconds += time.perf_counter() - t0
+        cpu_seconds += time.process_time() - c0
+        samples.append(_sample(sim))
+
+    level = sim._level  # diagnostics not exposed by the public API
+    last = samples[-1]
+    return {
+        "version": getattr(gs, "__version__", "unknown"),
+        "core_module": gs._core.__file__,  # its mtime tells whether a reinstall happened
+        "core_module_mtime": Path(gs._core.__file__).stat().st_mtime,
+        "run_seconds": run_seconds,
+        "cpu_seconds": cpu_seconds,
+        "setup_seconds": setup_seconds,
+        "steps": int(sim.step),
+        "n_triangles": int(len(mesh.triangles)),
+        "n_vertices": int(len(mesh.vertices)),
+        "n_final": int(last["atoms"]),
+        "lost_particles": sim.lost_particles,
+        "outlet_removed": None if outlet is None else outlet.removed_count,
+        "ke_trans_final": last["ke"],
+        "ke_rot_final": last["rke"],
+        "mean_z_final": last["zmean"],
+        "contacts_final": int(sim.num_contacts()),
+        "neighbor_builds": int(getattr(level, "rebuilds", -1)),
+        "rebuild_seconds": float(getattr(level, "rebuild_seconds", float("nan"))),
+        "samples": samples,
+        "rss_before_sim_kib": rss_before_kib,
+    }
+
+
+def _sample(sim: Any) -> dict[str, float]:
+    """The quantities of the LIGGGHTS thermo line: step atoms ke c_rke v_zmean."""
+    ke_total = float(sim.kinetic_energy())
+    with sim.particles(writable=False) as p:
+        n = len(p)
+        if n == 0:
+            return {"Step": sim.step, "atoms": 0, "ke": 0.0, "rke": 0.0, "zmean": float("nan")}
+        mass = np.asarray(p.mass, dtype=np.float64)
+        vel = np.asarray(p.velocity, dtype=np.float64)
+        ke_trans = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", vel, vel)))
+        zmean = float(np.sum(mass * p.position[:, 2]) / np.sum(mass))  # = LIGGGHTS xcm(all,z)
+    return {
+        "Step": sim.step,
+        "atoms": n,
+        "ke": ke_trans,
+        "rke": ke_total - ke_trans,
+        "zmean": zmean,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--case", type=Path, required=True, help="case parameters (JSON)")
+    parser.add_argument("--state", type=Path, required=True, help="initial state (.npz)")
+    parser.add_argument("--stl", type=Path, required=True, help="hopper mesh (STL)")
+    parser.add_argument(
+        "--deletion",
+        default="domain",
+        help="'domain' (lost at the box floor, as LIGGGHTS) or 'outlet[:every]' (gs Outlet)",
+    )
+    parser.add_argument("--output", type=Path, required=True, help="result file (JSON)")
+    args = parser.parse_args(argv)
+    if not (args.deletion == "domain" or args.deletion.startswith("outlet")):
+        parser.error(f"--deletion must be 'domain' or 'outlet[:every]', got {args.deletion!r}")
+    case = HopperCase(**json.loads(args.case.read_text()))
+    result = run(case, args.state, args.stl, args.deletion)
+    args.output.write_text(json.dumps(result, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
