@@ -109,7 +109,8 @@ def prepare_inputs(case: HopperCase, workdir: Path) -> None:
     script = liggghts_input(case, "../data.hopper", "../hopper.stl")
     (workdir / "in.hopper").write_text(script)
     setup_only = script.replace(f"run             {case.steps}", "run             0")
-    assert setup_only != script
+    if setup_only == script:
+        raise BenchmarkError("could not derive the 0-step LIGGGHTS input from the run input")
     (workdir / "in.hopper_setup").write_text(setup_only)
     np.savez(workdir / "state.npz", position=pos, velocity=vel)
     (workdir / "case.json").write_text(json.dumps(dataclasses.asdict(case)))
@@ -471,6 +472,11 @@ def print_table(entry: dict[str, Any]) -> None:
     for code in CODES:
         if code in s and not s[code]["deterministic"]:
             print(f"  note: {code} runs of this size did not reproduce each other exactly")
+    builds = {
+        r["extra"].get("core_module_mtime") for r in entry["runs"] if r["code"] == "grainscale"
+    }
+    if len(builds) > 1:
+        print(f"  note: grainscale was reinstalled between rounds ({len(builds)} different builds)")
     warned = {w for run in entry["runs"] for w in run["warnings"]}
     for w in sorted(warned):
         print(f"  warning: {w}")

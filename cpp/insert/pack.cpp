@@ -33,7 +33,7 @@ class VoxelSampler {
     hi.array() -= rho;
     const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-300));
     Real h = 0.5 * rho;
-    const Real max_voxels = 2e6;  // 48 MB of voxel corners at most
+    const Real max_voxels = 2e6;  // initial voxels (at most half of kMaxVoxels)
     const Real count = (extent / h).array().ceil().prod();
     if (count > max_voxels) h *= std::cbrt(count / max_voxels) * 1.01;
     int dims[3];
@@ -45,6 +45,7 @@ class VoxelSampler {
           const Vec3 v = lo + h * Vec3(x, y, z);
           if (may_hold_centre(v, 0)) voxels_[0].push_back(v);
         }
+    size_ = voxels_[0].size();
   }
 
   bool empty() const {
@@ -76,19 +77,26 @@ class VoxelSampler {
     const Vec3 v = list[slot];
     list[slot] = list.back();
     list.pop_back();
-    if (!may_hold_centre(v, level) || level + 1 == kLevels) {
-      if (level + 1 == kLevels && may_hold_centre(v, level)) list.push_back(v);
+    --size_;
+    if (!may_hold_centre(v, level)) return;
+    if (level + 1 == kLevels || size_ + 8 > kMaxVoxels) {  // finest level or memory bound: keep
+      list.push_back(v);
+      ++size_;
       return;
     }
     const Real h = edge_[level + 1];
     for (int k = 0; k < 8; ++k) {
       const Vec3 c = v + h * Vec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-      if (may_hold_centre(c, level + 1)) voxels_[level + 1].push_back(c);
+      if (may_hold_centre(c, level + 1)) {
+        voxels_[level + 1].push_back(c);
+        ++size_;
+      }
     }
   }
 
  private:
   static constexpr int kLevels = 10;
+  static constexpr std::size_t kMaxVoxels = 4'000'000;  // 96 MB of voxel corners
   Real volume(int level) const { return edge_[level] * edge_[level] * edge_[level]; }
   bool may_hold_centre(const Vec3& lo, int level) const {
     const Real h = edge_[level];
@@ -103,6 +111,7 @@ class VoxelSampler {
   Real rho_ = 0;
   Real edge_[kLevels] = {};
   std::vector<Vec3> voxels_[kLevels];
+  std::size_t size_ = 0;  // voxels in all levels
 };
 
 }  // namespace
@@ -140,9 +149,10 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
   out.position.reserve(radii.size());
   out.radius.reserve(radii.size());
   Real placed_volume = 0;
-  // Plain uniform trials first; after `direct` failures for one particle the voxel sampler takes
-  // over for the rest of the packing.
-  const int direct = std::min(spec.max_attempts, 5000);
+  // Plain uniform trials first (cheap while the region is far from full); after `direct` failures
+  // for one particle the voxel sampler takes over for the rest of the packing, and max_attempts
+  // directed trials decide that a particle finds no room.
+  const int direct = 5000;
   std::unique_ptr<VoxelSampler> voxels;
   for (std::size_t k = 0; k < radii.size(); ++k) {
     const Real r = radii[k];
@@ -160,14 +170,14 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
       placed_volume += sphere_volume(r);
       ok = true;
     };
-    for (; !voxels && attempt < direct && !ok; ++attempt) {
+    for (int trial = 0; !voxels && trial < direct && !ok; ++trial) {
       const Vec3 x = spec.region.sample(rng, r);
       if (!grid.overlaps(x, r)) accept(x);
     }
-    if (!ok && !voxels && attempt < spec.max_attempts)
+    if (!ok && !voxels)
       voxels = std::make_unique<VoxelSampler>(
           spec.region, *std::min_element(radii.begin() + k, radii.end()), grid);
-    for (; voxels && !voxels->empty() && attempt < spec.max_attempts && !ok; ++attempt) {
+    for (; !ok && !voxels->empty() && attempt < spec.max_attempts; ++attempt) {
       int level = 0;
       std::size_t slot = 0;
       const Vec3 x = voxels->sample(rng, level, slot);

@@ -26,7 +26,7 @@ struct PackSpec {
   std::int32_t material = 0;  // material index of the level
   Vec3 velocity = Vec3::Zero();
   std::uint64_t seed = 0;
-  int max_attempts = 1000;  // trial positions per particle
+  int max_attempts = 1000;  // directed trials per particle once the region is nearly full
 };
 
 struct Placement {

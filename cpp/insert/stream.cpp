@@ -110,8 +110,8 @@ Real StreamInserter::pending_mass() const {
 std::string StreamInserter::save_state() const {
   std::ostringstream out;
   out.precision(std::numeric_limits<Real>::max_digits10);
-  out << "stream-v1 " << next_batch_ << ' ' << scheduled_mass_ << ' ' << inserted_mass_ << ' '
-      << inserted_count_ << ' ' << pending_.size();
+  out << "stream-v1 " << spec_.start << ' ' << next_batch_ << ' ' << scheduled_mass_ << ' '
+      << inserted_mass_ << ' ' << inserted_count_ << ' ' << pending_.size();
   for (Real r : pending_) out << ' ' << r;
   out << ' ' << rng_;
   return out.str();
@@ -121,15 +121,16 @@ void StreamInserter::load_state(const std::string& state) {
   std::istringstream in(state);
   std::string tag;
   std::int64_t batch = 0, count = 0;
-  Real scheduled = 0, inserted = 0;
+  Real start = 0, scheduled = 0, inserted = 0;
   std::size_t n = 0;
-  in >> tag >> batch >> scheduled >> inserted >> count >> n;
+  in >> tag >> start >> batch >> scheduled >> inserted >> count >> n;
   std::vector<Real> pending(in ? n : 0);
   for (Real& r : pending) in >> r;
   Rng rng;
   in >> rng;
   if (tag != "stream-v1" || in.fail())
     throw_invalid("Stream state", "text written by get_state() of a stream", "'" + tag + " ...'");
+  spec_.start = start;  // as registered in the run that wrote the state (may default to "now")
   next_batch_ = batch;
   scheduled_mass_ = scheduled;
   inserted_mass_ = inserted;

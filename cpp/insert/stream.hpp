@@ -70,8 +70,8 @@ class StreamInserter {
   std::int64_t batches() const { return next_batch_; }
   const std::vector<Real>& pending_radii() const { return pending_; }
 
-  // Complete mutable state (counters, pending particles, random engine) as text, and back; the
-  // spec is not part of it (re-create the stream with the same parameters, then load).
+  // Complete mutable state (start time, counters, pending particles, random engine) as text, and
+  // back; the rest of the spec is not part of it (re-create the stream, then load).
   std::string save_state() const;
   void load_state(const std::string& state);
 

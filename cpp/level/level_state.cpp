@@ -133,10 +133,12 @@ void Level::load_state(const LevelState& s) {
   if (sig->second != signature())
     throw InvalidArgument("checkpoint was written for the set-up '" + sig->second +
                           "', this simulation is '" + signature() + "'");
-  prepare();  // law tables and history layout of this set-up
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
   if (si.size() != 7 || sr.size() != 6) throw std::runtime_error("checkpoint scalars are corrupt");
+  dt_ = sr[2];
+  skin_ = sr[3];
+  prepare();  // law tables and history layout of this set-up
   const std::size_t nl = reals(s, "particles/radius").size();
   const std::size_t no = static_cast<std::size_t>(si[5]);
   if (no > nl) throw std::runtime_error("checkpoint particle counts are corrupt");

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 
@@ -195,12 +195,16 @@ class Normal(_Base):
         object.__setattr__(self, "max", hi)
         self._to_core()  # the core checks that [min, max] holds probability
 
+    def _range(self) -> tuple[float, float]:
+        return cast(float, self.min), cast(float, self.max)  # resolved in __post_init__
+
     def _to_core(self) -> _core.SizeDistribution:
-        return _core.SizeDistribution.normal(self.mean, self.std, self.min, self.max)
+        return _core.SizeDistribution.normal(self.mean, self.std, *self._range())
 
     def _standard_bounds(self) -> tuple[float, float, float]:
-        a = (self.min - self.mean) / self.std
-        b = (self.max - self.mean) / self.std
+        lo, hi = self._range()
+        a = (lo - self.mean) / self.std
+        b = (hi - self.mean) / self.std
         return a, b, _cdf(b) - _cdf(a)
 
     @property
@@ -254,16 +258,20 @@ class LogNormal(_Base):
         object.__setattr__(self, "max", hi)
         self._to_core()
 
+    def _range(self) -> tuple[float, float]:
+        return cast(float, self.min), cast(float, self.max)  # resolved in __post_init__
+
     def _to_core(self) -> _core.SizeDistribution:
-        return _core.SizeDistribution.lognormal(self.median, self.sigma, self.min, self.max)
+        return _core.SizeDistribution.lognormal(self.median, self.sigma, *self._range())
 
     def moment(self, k: int) -> float:
         """E[r^k] by number after truncation (m^k)."""
         mu, s = math.log(self.median), self.sigma
         if s == 0:
-            return self.median**k
-        a = (math.log(self.min) - mu) / s
-        b = (math.log(self.max) - mu) / s
+            return float(self.median**k)
+        lo, hi = self._range()
+        a = (math.log(lo) - mu) / s
+        b = (math.log(hi) - mu) / s
         z = _cdf(b) - _cdf(a)
         return math.exp(k * mu + 0.5 * (k * s) ** 2) * (_cdf(b - k * s) - _cdf(a - k * s)) / z
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import KW_ONLY, dataclass
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple, cast
 
 import numpy as np
 
@@ -330,7 +330,7 @@ class Pack:
     def _insert(self, sim: Simulation) -> np.ndarray:
         first, n = sim._level.pack(
             _core_region(self.region, "Pack"),
-            self.radius._to_core(),
+            cast(Distribution, self.radius)._to_core(),
             -1 if self.count is None else int(self.count),
             -1.0 if self.volume_fraction is None else float(self.volume_fraction),
             sim.material_index(self.material),
@@ -365,8 +365,8 @@ class Stream:
         material: the particles' material.
         velocity: initial velocity (m/s).
         seed: random seed (radii and positions).
-        start: time of the first batch (s).
-        stop: time after which no more mass is requested (s); None: never.
+        start: simulated time of the first batch (s); None: when the stream is registered.
+        stop: simulated time after which no more mass is requested (s); None: never.
         every: batch interval (s); None: the time to travel one largest diameter at the normal
             insertion speed (then the velocity must cross the face).
         max_attempts: trial positions per pending particle and batch.
@@ -379,7 +379,7 @@ class Stream:
     material: Material
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     seed: int = 0
-    start: float = 0.0
+    start: float | None = None
     stop: float | None = None
     every: float | None = None
     max_attempts: int = 50
@@ -397,13 +397,13 @@ class Stream:
         _material("Stream", self.material)
         object.__setattr__(self, "velocity", vector3("Stream", "velocity", self.velocity))
         object.__setattr__(self, "seed", _seed("Stream", self.seed))
-        start = non_negative("Stream", "start", self.start)
-        object.__setattr__(self, "start", start)
+        if self.start is not None:
+            object.__setattr__(self, "start", non_negative("Stream", "start", self.start))
         if self.stop is not None:
             stop = positive("Stream", "stop", self.stop, " (s)")
-            if not stop > start:
+            if self.start is not None and not stop > self.start:
                 raise ValueError(
-                    f"Stream.stop must be greater than start = {start!r} s, got {stop!r}"
+                    f"Stream.stop must be greater than start = {self.start!r} s, got {stop!r}"
                 )
             object.__setattr__(self, "stop", stop)
         if self.every is not None:
@@ -439,12 +439,12 @@ class Stream:
     def _insert(self, sim: Simulation) -> StreamHandle:
         index = sim._level.add_stream(
             self.face._to_core(),
-            self.radius._to_core(),
+            cast(Distribution, self.radius)._to_core(),
             self.mass_rate,
             sim.material_index(self.material),
             self.velocity,
             self.seed,
-            self.start,
+            sim.time if self.start is None else self.start,
             self.stop,
             self.every,
             self.max_attempts,
@@ -508,6 +508,11 @@ class StreamHandle:
         return int(self._level.stream_status(self.index)["pending_count"])
 
     @property
+    def max_radius(self) -> float:
+        """Largest radius the stream inserts (m)."""
+        return cast(Distribution, self.stream.radius).max_radius
+
+    @property
     def interval(self) -> float:
         """Batch interval (s)."""
         return float(self._level.stream_status(self.index)["interval"])
@@ -560,7 +565,7 @@ class OutletHistory(NamedTuple):
 
     time: np.ndarray  # s
     mass: np.ndarray  # kg, cumulative
-    count: np.ndarray  # cumulative number of particles
+    number: np.ndarray  # cumulative number of particles
 
 
 class OutletHandle:
@@ -582,7 +587,7 @@ class OutletHandle:
         return float(self._level.outlet_status(self.index)["removed_mass"])
 
     def history(self) -> OutletHistory:
-        """(time s, cumulative mass kg, cumulative count) arrays; the discharge rate is the
+        """(time s, cumulative mass kg, cumulative number) arrays; the discharge rate is the
         slope of mass over time (e.g. ``np.polyfit(time, mass, 1)[0]`` in kg/s)."""
         t, m, c = self._level.outlet_history(self.index)
         return OutletHistory(np.asarray(t), np.asarray(m), np.asarray(c))

@@ -568,7 +568,7 @@ class Simulation:
         self._push_interactions()
         # Streams count as particles to come: their largest diameter for the skin, their
         # smallest particle's Rayleigh time for the time step.
-        d_stream = max((2.0 * h.stream.radius.max_radius for h in self._streams), default=0.0)
+        d_stream = max((2.0 * h.max_radius for h in self._streams), default=0.0)
         if not self._skin_fixed and (self.num_particles > 0 or d_stream > 0):
             d_max = d_stream
             if self.num_particles > 0:

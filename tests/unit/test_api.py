@@ -299,3 +299,14 @@ def test_contacts_need_recording_switched_on():
     sim.record_contacts = True
     sim.run(steps=1)
     assert len(sim.contacts()["overlap"]) == 0
+
+
+def test_unsupported_law_combination_lists_the_supported_ones():
+    sim = small_sim()
+    with pytest.raises(ValueError) as err:
+        sim._level.set_contact_law("jkr", "epsd", False, True, False)
+    message = str(err.value)
+    assert "contact law (normal+rolling) must be one of:" in message
+    assert "got jkr+epsd" in message
+    for name in gs.contact.supported_laws():
+        assert name in message

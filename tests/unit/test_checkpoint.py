@@ -126,3 +126,27 @@ def test_corrupt_files_give_clear_errors(tmp_path):
         f.attrs["format"] = "something else"
     with pytest.raises(ValueError, match="not a grainscale checkpoint"):
         build(LAWS[0]).restart(other)
+
+
+def test_restart_with_default_skin_and_time_step(tmp_path):
+    def bare() -> gs.Simulation:
+        sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.02, 0.02, 0.04)))
+        sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+        return sim
+
+    a = bare()
+    a.add_particles(position=[[0.01, 0.01, 0.0105]], radius=1e-3, material=GLASS)
+    a.run(steps=300)
+    path = tmp_path / "state.h5"
+    a.checkpoint(path)
+    b = bare()
+    b.restart(path)
+    assert b.time_step == a.time_step and b.skin == a.skin
+    a.run(steps=300)
+    b.run(steps=300)
+    assert np.array_equal(snapshot_particles(a), snapshot_particles(b))
+
+
+def snapshot_particles(sim: gs.Simulation) -> np.ndarray:
+    with sim.particles(writable=False) as p:
+        return np.concatenate([p.position.ravel(), p.velocity.ravel(), p.force.ravel()])
