@@ -36,7 +36,7 @@ $(VENV)/.installed: $(SOURCES) | system-deps $(VENV)/bin/python
 install: system-deps $(VENV)/.installed
 
 demo: install
-	$(PY) -m grainscale.examples.pour_and_settle --output out/demo
+	$(PY) -m grainscale.examples.hopper_demo --output out/demo
 
 # Lint, the C++ unit tests, then the Python suite (unit, physics validation, demo).
 test: install lint test-cpp

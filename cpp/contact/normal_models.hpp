@@ -47,7 +47,7 @@ struct HertzNormal {
   static Pair make_pair(const PairModuli& m, const Interaction&) {
     return {m.effective_youngs, m.effective_shear};
   }
-  static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
+  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
     const Real sqrt_rd = std::sqrt(c.r_eff * c.overlap);
     const Real kn = (4.0 / 3.0) * p.effective_youngs * sqrt_rd;
     return {kn * c.overlap, kn, 2 * p.effective_youngs * sqrt_rd, 8 * p.effective_shear * sqrt_rd};
@@ -70,7 +70,8 @@ struct LinearNormal {
     return {in.normal_stiffness, 2.0 / 7.0, in.tangential_stiffness, m.effective_youngs,
             in.characteristic_velocity};
   }
-  static NormalState evaluate(const Pair& p, const ContactInput& c, Real* history) {
+  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c,
+                                                     Real* history) {
     Real kn = p.normal_stiffness;
     if (!(kn > 0)) {
       kn = history[0];
@@ -105,7 +106,8 @@ struct EEPANormal {
   static Real power(Real x, Real n) {
     return n == 1 ? x : (n == 1.5 ? x * std::sqrt(x) : std::pow(x, n));
   }
-  static NormalState evaluate(const Pair& p, const ContactInput& c, Real* history) {
+  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c,
+                                                     Real* history) {
     const Real n = p.exponent;
     Real k1 = p.loading_stiffness;
     if (!(k1 > 0))

@@ -35,7 +35,8 @@ struct NoRolling {
   static constexpr const char* kName = "none";
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = false;
-  static Vec3 evaluate(const RollingPair&, const RollingContext&, const ContactInput&, Real*) {
+  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair&, const RollingContext&,
+                                              const ContactInput&, Real*) {
     return Vec3::Zero();
   }
 };
@@ -48,8 +49,8 @@ struct CDTRolling {
   static constexpr const char* kName = "cdt";
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = true;
-  static Vec3 evaluate(const RollingPair& p, const RollingContext& k, const ContactInput& c,
-                       Real*) {
+  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
+                                              const ContactInput& c, Real*) {
     const Vec3 wr = rolling_velocity(c);
     const Real w = wr.norm();
     if (w == 0 || k.normal_force <= 0) return Vec3::Zero();
@@ -62,8 +63,8 @@ struct SpringDashpotRolling {
   static constexpr const char* kName = kEPSD2 ? "epsd2" : "epsd";
   static constexpr int kHistorySize = 3;  // spring torque M_k (3-vector)
   static constexpr bool kActive = true;
-  static Vec3 evaluate(const RollingPair& p, const RollingContext& k, const ContactInput& c,
-                       Real* history) {
+  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
+                                              const ContactInput& c, Real* history) {
     const Vec3 wr = rolling_velocity(c);
     const Real r2 = c.r_eff * c.r_eff;
     const Real kr = kEPSD2 ? k.tangential_stiffness * r2

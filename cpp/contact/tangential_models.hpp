@@ -33,8 +33,9 @@ struct MindlinTangential {
   static constexpr int kHistorySize = 3;  // spring (3-vector)
 
   // Force on i. kt, gt: stiffness and damping; ft_max = mu max(F_n, 0).
-  static Vec3 evaluate(TangentialHistory form, Real kt, Real gt, Real ft_max, const ContactInput& c,
-                       const Vec3& vt, Real* history) {
+  [[gnu::always_inline]] static Vec3 evaluate(TangentialHistory form, Real kt, Real gt, Real ft_max,
+                                              const ContactInput& c, const Vec3& vt,
+                                              Real* history) {
     Eigen::Map<Vec3> spring(history);
     rotate_into_tangent_plane(spring, c.normal);
     const bool total = form == TangentialHistory::Total;

@@ -1,4 +1,4 @@
-"""The hopper demo (``make demo``): STL hopper, poured fill, discharge; its files and its physics."""
+"""The hopper demo (``make demo``): STL hopper, poured fill, discharge; its files and physics."""
 
 from __future__ import annotations
 
@@ -70,7 +70,7 @@ def test_hopper_demo_particles_flow_out(quick_hopper: tuple[Path, str]) -> None:
     # nothing is lost once the pour is over: every particle is in the hopper or below it
     assert np.all(total[np.argmax(total == inserted) :] == inserted)
     # the hopper filled with the gate closed, then emptied through its outlet
-    full = int(np.argmax(hist["hopper_count"]))
+    full = int(np.nonzero(hist["discharged_count"] == 0)[0][-1])  # just before the gate opened
     assert hist["hopper_count"][full] == inserted
     assert hist["discharged_count"][full] == 0
     assert hist["discharged_count"][-1] > 0.9 * inserted

@@ -38,9 +38,9 @@ import grainscale as gs
 
 DATA = Path(__file__).resolve().parent / "data"
 PACKAGED_STL = DATA / "hopper.stl"
-DEFAULT_PARTICLES = 4000
+DEFAULT_PARTICLES = 3500
 QUICK_PARTICLES = 600
-DEFAULT_DURATION = 2.0  # s
+DEFAULT_DURATION = 1.8  # s
 QUICK_DURATION = 0.8  # s
 WINDOW = (0.2, 0.7)  # fractions of the hopper inventory for the discharge rate
 
@@ -377,8 +377,8 @@ def run(
     gate_z = geo.outlet_z - 0.1 * d
     gate = sim.add_wall(
         gs.geometry.Mesh(
-            vertices=[(-g, -g, gate_z), (g, -g, gate_z), (g, g, gate_z), (-g, g, gate_z)],
-            triangles=[(0, 1, 2), (0, 2, 3)],
+            vertices=np.array([(-g, -g, gate_z), (g, -g, gate_z), (g, g, gate_z), (-g, g, gate_z)]),
+            triangles=np.array([(0, 1, 2), (0, 2, 3)]),
             material=glass,
         )
     )
