@@ -20,9 +20,10 @@ D0 = 40-64 mm, three seeds) takes days on one core. The default here is a reduce
 version: D0 = 24, 28, 32, 36 mm (D0/d = 6-9), one seed, each orifice in the smallest silo
 Beverloo allows (D_s = 2.5 D0) filled 4 D0 high (4600-15500 particles), enough for the rate
 to stay steady down to 70 % of the inventory (a shallower bed slows down well before that).
-That is about 8e9 particle-steps: some 15 minutes on two free cores. ``--quick``: one 60 mm
-silo filled 72 mm high (about 3500 particles), D0 = 24 and 27 mm, about a minute on two cores.
-The runs go to worker processes (``--jobs``, default: one per CPU).
+That is about 8e9 particle-steps: 15-20 minutes on two cores. ``--quick``: one 60 mm silo
+filled 72 mm high (about 3500 particles), D0 = 24 and 27 mm, about 1.5 minutes on two cores.
+The runs go to worker processes (``--jobs``, default: one per CPU); ``--reanalyse`` fits,
+plots and reports a finished study again without simulating.
 
 The discharge rate does not depend on the reduced stiffness: D0 = 24 mm in a 60 mm silo gave
 W = 0.0924 kg/s with E = 1e8 Pa and 0.0929 kg/s with E = 1e7 Pa (the physics test runs at
@@ -628,9 +629,10 @@ class BeverlooFit:
     k: float
     exponent: float
     free_exponent: bool
+    free_k: bool
     rms_log_residual: float
     points: int
-    at_bound: bool  # the best k or exponent lies on the edge of the search range
+    at_bound: bool  # a fitted k or exponent lies on the edge of its search range
 
     def rate(self, orifice: Any, diameter: float, bulk_density: float) -> Any:
         return beverloo_rate(orifice, diameter, bulk_density, self.c, self.k, self.exponent)
@@ -642,25 +644,28 @@ def fit_beverloo(
     diameter: float,
     bulk_density: float | Sequence[float],
     exponent: float | None = 2.5,
+    k: float | None = None,
 ) -> BeverlooFit:
-    """Fit C and k (and the exponent when ``exponent`` is None) to measured rates.
+    """Fit W = C rho_b sqrt(g) (D0 - k d)^n to measured rates (least squares in log W).
 
-    ``bulk_density`` is one value or one per orifice (kg/m^3).
-
-    Minimises the squared residuals of log W; C is solved for in closed form, k (step 1e-3, in
-    [-3, min D0/d)) and the exponent (in [1, 4], step 1e-3 after a 1e-2 scan) by search. Needs
-    two orifices (three for a free exponent, which is then exactly determined).
+    C is always fitted (in closed form); ``exponent`` None fits the exponent (search in [1, 4],
+    step 1e-3 after a 1e-2 scan), ``k`` None fits k (search in [0, min D0/d), step 1e-3).
+    ``bulk_density`` is one value or one per orifice (kg/m^3). Needs at least as many valid
+    rates as free parameters (then the fit is exact).
     """
     d0 = np.asarray(orifice, dtype=float)
     w = np.asarray(rate, dtype=float)
     rho = np.broadcast_to(np.asarray(bulk_density, dtype=float), d0.shape)
     ok = np.isfinite(w) & (w > 0)
     d0, w, rho = d0[ok], w[ok], rho[ok]
-    need = 2 if exponent is not None else 3
+    need = 1 + (exponent is None) + (k is None)
     if len(d0) < need:
         raise ValueError(f"fit_beverloo needs at least {need} valid rates, got {len(d0)}")
+    k_max = d0.min() / diameter
+    if k is not None and not 0 <= k < k_max:
+        raise ValueError(f"fit_beverloo.k must be in [0, min D0/d = {k_max:g}), got {k!r}")
     ly = np.log(w / (rho * math.sqrt(G)))
-    ks = np.arange(-3.0, d0.min() / diameter - 1e-3, 1e-3)
+    ks = np.arange(0.0, k_max - 1e-3, 1e-3) if k is None else np.array([float(k)])
     x = np.log(d0[None, :] - ks[:, None] * diameter)
 
     def best(n: float) -> tuple[float, float, float]:
@@ -670,21 +675,22 @@ def fit_beverloo(
         return float(ss[i]), float(ks[i]), float(math.exp(logc[i]))
 
     if exponent is not None:
-        ss, k, c = best(float(exponent))
         n = float(exponent)
-        at_bound = k in (ks[0], ks[-1])
     else:
         coarse = np.arange(1.0, 4.0 + 1e-9, 0.01)
-        n0 = float(coarse[int(np.argmin([best(n)[0] for n in coarse]))])
+        n0 = float(coarse[int(np.argmin([best(v)[0] for v in coarse]))])
         fine = np.arange(max(1.0, n0 - 0.01), min(4.0, n0 + 0.01) + 1e-9, 1e-3)
         n = float(fine[int(np.argmin([best(v)[0] for v in fine]))])
-        ss, k, c = best(n)
-        at_bound = k in (ks[0], ks[-1]) or n in (1.0, 4.0)
+    ss, k_fit, c = best(n)
+    at_bound = (k is None and k_fit in (ks[0], ks[-1])) or (
+        exponent is None and (n <= 1.0 or n >= 4.0)
+    )
     return BeverlooFit(
         c=c,
-        k=k,
+        k=k_fit,
         exponent=n,
         free_exponent=exponent is None,
+        free_k=k is None,
         rms_log_residual=math.sqrt(ss / len(d0)),
         points=len(d0),
         at_bound=bool(at_bound),
@@ -707,13 +713,15 @@ class StudyResult:
     rate_mean: list[float]  # kg/s per orifice (over the seeds that did not clog)
     rate_std: list[float]  # kg/s, sample standard deviation over the seeds (NaN for one)
     bulk_density: list[float]  # kg/m^3 per orifice (mean over the seeds)
-    fit: BeverlooFit | None  # exponent 2.5
-    fit_free: BeverlooFit | None
+    fit: BeverlooFit | None  # C and k, exponent 2.5
+    fit_free: BeverlooFit | None  # C, k and the exponent
+    fit_exponent: BeverlooFit | None  # C and the exponent, k = 1.5
     wall_clock: float
     output: Path
     plot: Path
     report: Path
     report_text: str = ""
+    jobs: int = 1  # worker processes the runs used
 
     @property
     def reference_rate(self) -> list[float]:
@@ -734,6 +742,22 @@ def _aggregate(orifices: list[float], runs: list[DischargeResult]):
         std.append(float(np.std(w, ddof=1)) if len(w) > 1 else math.nan)
         rho.append(float(np.mean([r.bulk_density for r in mine])))
     return mean, std, rho
+
+
+def fit_all(
+    orifices: Sequence[float], rate: Sequence[float], rho: Sequence[float], diameter: float
+) -> tuple[BeverlooFit | None, BeverlooFit | None, BeverlooFit | None]:
+    """The three Beverloo fits of a study: (n = 2.5; C, k), (C, k, n), (k = 1.5; C, n); None
+    where there are too few valid rates."""
+    valid = [(a, w, b) for a, w, b in zip(orifices, rate, rho, strict=True) if math.isfinite(w)]
+    if len(valid) < 2:
+        return None, None, None
+    d0, w, b = zip(*valid, strict=True)
+    return (
+        fit_beverloo(d0, w, diameter, b, exponent=2.5),
+        fit_beverloo(d0, w, diameter, b, exponent=None) if len(valid) >= 3 else None,
+        fit_beverloo(d0, w, diameter, b, exponent=None, k=BEVERLOO_K),
+    )
 
 
 def run_study(
@@ -771,9 +795,11 @@ def run_study(
     if jobs < 1:
         raise ValueError(f"run_study.jobs must be at least 1, got {jobs}")
     counts = [case.target_mass(d0) / case.mean_particle_mass for d0 in orifices]
+    lo, hi = min(counts), max(counts)
+    count = f"{lo:.0f}" if hi - lo < 1 else f"{lo:.0f}-{hi:.0f}"
     say(
         f"grainscale silo discharge (CASES D1, reduced): {case.describe()}, "
-        f"~{min(counts):.0f}-{max(counts):.0f} particles "
+        f"~{count} particles per silo "
         f"(d = {case.diameter * 1e3:g} mm +/- {case.diameter_spread:.0%}), "
         f"D0 = {', '.join(f'{v * 1e3:g}' for v in orifices)} mm, seeds {seeds}; "
         f"{len(tasks)} runs on {jobs} process(es); output in {out}"
@@ -781,7 +807,6 @@ def run_study(
     t0 = time.perf_counter()
     runs = run_many(tasks, jobs, verbose)
     wall = time.perf_counter() - t0
-
     for r in runs:
         np.savetxt(
             out / f"history_D{r.orifice * 1e3:g}_s{r.seed}.csv",
@@ -791,15 +816,22 @@ def run_study(
             comments="",
             fmt=["%.6f", "%.6e", "%d"],
         )
-    mean, std, rho = _aggregate(orifices, runs)
-    fit = fit_free = None
-    valid = [(d0, w, b) for d0, w, b in zip(orifices, mean, rho, strict=True) if math.isfinite(w)]
-    if len(valid) >= 2:
-        v_d0, v_w, v_rho = zip(*valid, strict=True)
-        fit = fit_beverloo(v_d0, v_w, case.diameter, v_rho, exponent=2.5)
-        if len(valid) >= 3:
-            fit_free = fit_beverloo(v_d0, v_w, case.diameter, v_rho, exponent=None)
+    return _finish(case, orifices, seeds, runs, wall, out, jobs, verbose)
 
+
+def _finish(
+    case: SiloCase,
+    orifices: list[float],
+    seeds: list[int],
+    runs: list[DischargeResult],
+    wall: float,
+    out: Path,
+    jobs: int,
+    verbose: bool,
+) -> StudyResult:
+    """Fit, plot and report the runs of a study."""
+    mean, std, rho = _aggregate(orifices, runs)
+    fits = fit_all(orifices, mean, rho, case.diameter)
     result = StudyResult(
         case=case,
         orifices=orifices,
@@ -808,20 +840,59 @@ def run_study(
         rate_mean=mean,
         rate_std=std,
         bulk_density=rho,
-        fit=fit,
-        fit_free=fit_free,
+        fit=fits[0],
+        fit_free=fits[1],
+        fit_exponent=fits[2],
         wall_clock=wall,
         output=out,
         plot=out / "discharge.png",
         report=out / "report.md",
+        jobs=jobs,
     )
     _plot(result.plot, result)
-    result.report_text = _report(result, jobs)
+    result.report_text = _report(result)
     result.report.write_text(result.report_text)
     _write_json(out / "results.json", result)
-    say("")
-    say(result.report_text)
+    if verbose:
+        _print("")
+        _print(result.report_text)
     return result
+
+
+def reanalyse(output: str | Path, verbose: bool = True) -> StudyResult:
+    """Fit, plot and report again a finished study from its results.json and outlet histories
+    (no simulation; e.g. after a change of the analysis)."""
+    out = Path(output)
+    data = json.loads((out / "results.json").read_text())
+    case = SiloCase(**data["case"])
+    names = {f.name for f in dataclasses.fields(DischargeResult)}
+    runs = []
+    for summary in data["runs"]:
+        h = np.loadtxt(
+            out / f"history_D{summary['orifice'] * 1e3:g}_s{summary['seed']}.csv",
+            delimiter=",",
+            skiprows=1,
+            ndmin=2,
+        )
+        values: dict[str, Any] = {
+            k: math.nan if v is None else v for k, v in summary.items() if k in names
+        }
+        t, m = h[:, 0], h[:, 1]
+        w, w1, w2, r2 = measure_rate(t, m, float(values["inventory"]))
+        values.update(time=t, mass=m, count=h[:, 2].astype(np.int64))
+        values.update(rate=w, rate_first_half=w1, rate_second_half=w2, r_squared=r2)
+        runs.append(DischargeResult(**values))
+    runs.sort(key=lambda r: (r.orifice, r.seed))
+    return _finish(
+        case,
+        sorted({r.orifice for r in runs}),
+        sorted({r.seed for r in runs}),
+        runs,
+        float(data.get("wall_clock_s") or math.nan),
+        out,
+        int(data.get("jobs") or 1),
+        verbose,
+    )
 
 
 def _write_json(path: Path, r: StudyResult) -> None:
@@ -845,9 +916,11 @@ def _write_json(path: Path, r: StudyResult) -> None:
         "bulk_density_kg_m3": r.bulk_density,
         "beverloo_reference_kg_s": r.reference_rate,
         "fit_exponent_2_5": None if r.fit is None else dataclasses.asdict(r.fit),
-        "fit_free_exponent": None if r.fit_free is None else dataclasses.asdict(r.fit_free),
+        "fit_free": None if r.fit_free is None else dataclasses.asdict(r.fit_free),
+        "fit_k_1_5": None if r.fit_exponent is None else dataclasses.asdict(r.fit_exponent),
         "runs": [run.summary() for run in r.runs],
         "wall_clock_s": r.wall_clock,
+        "jobs": r.jobs,
     }
     path.write_text(json.dumps(clean(data), indent=2) + "\n")
 
@@ -912,13 +985,22 @@ def _plot(path: Path, r: StudyResult) -> None:
             color="tab:blue",
             label=f"fit, n = 2.5: C = {r.fit.c:.3f}, k = {r.fit.k:.2f}",
         )
+    if r.fit_exponent is not None:
+        ax_w.plot(
+            grid * 1e3,
+            r.fit_exponent.rate(grid, d, rho),
+            color="tab:green",
+            linestyle="-.",
+            label=f"fit, k = {BEVERLOO_K}: n = {r.fit_exponent.exponent:.2f}, "
+            f"C = {r.fit_exponent.c:.3f}",
+        )
     if r.fit_free is not None:
         ax_w.plot(
             grid * 1e3,
             r.fit_free.rate(grid, d, rho),
             color="tab:red",
             linestyle="--",
-            label=f"fit, n free: n = {r.fit_free.exponent:.2f}, C = {r.fit_free.c:.3f}, "
+            label=f"fit, all free: n = {r.fit_free.exponent:.2f}, C = {r.fit_free.c:.3f}, "
             f"k = {r.fit_free.k:.2f}",
         )
     ax_w.set_xlabel("orifice diameter D0 (mm)")
@@ -959,7 +1041,7 @@ def _plot(path: Path, r: StudyResult) -> None:
     plt.close(fig)
 
 
-def _report(r: StudyResult, jobs: int) -> str:
+def _report(r: StudyResult) -> str:
     case, d = r.case, r.case.diameter
     mm = 1e3
     rho_mean = float(np.mean(r.bulk_density))
@@ -984,7 +1066,7 @@ def _report(r: StudyResult, jobs: int) -> str:
         f"height), measured per run: mean {rho_mean:.0f} kg/m³ = {rho_mean / case.density:.3f} ρ_p",
         f"- W = slope of the discharged mass between {WINDOW[0]:.0%} and {WINDOW[1]:.0%} of the "
         "inventory (outlet removal history, least squares)",
-        f"- seeds {r.seeds}; {len(r.runs)} runs on {jobs} process(es), "
+        f"- seeds {r.seeds}; {len(r.runs)} runs on {r.jobs} process(es), "
         f"{r.wall_clock:.0f} s wall-clock",
         "",
         "## Measured discharge rates",
@@ -1013,13 +1095,21 @@ def _report(r: StudyResult, jobs: int) -> str:
             f"C = {f.c * rho_mean / (0.6 * case.density):.3f})"
             + (" — k at the edge of the search range" if f.at_bound else "")
         )
+    if r.fit_exponent is not None:
+        f = r.fit_exponent
+        lines.append(
+            f"- k fixed at {BEVERLOO_K}: **n = {f.exponent:.2f}**, C = {f.c:.3f} m^(2.5 − n) "
+            f"(rms log residual {f.rms_log_residual:.3f})"
+            + (" — n at the edge of the search range" if f.at_bound else "")
+        )
     if r.fit_free is not None:
         f = r.fit_free
         lines.append(
-            f"- exponent free: **n = {f.exponent:.2f}**, C = {f.c:.3f}, k = {f.k:.2f} (rms log "
+            f"- all free (k ≥ 0): n = {f.exponent:.2f}, C = {f.c:.3f} m^(2.5 − n), k = {f.k:.2f} "
+            "(rms log "
             f"residual {f.rms_log_residual:.3f}; {f.points} orifices for 3 parameters: n and k "
-            "are strongly correlated over this narrow range of D0)"
-            + (" — at the edge of the search range" if f.at_bound else "")
+            "are strongly correlated over this narrow range of D0, so this fit follows the "
+            "noise)" + (" — at the edge of the search range" if f.at_bound else "")
         )
     if r.fit is None:
         lines.append("- not enough orifices with a measured rate for a fit")
@@ -1130,9 +1220,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--vtk-every", type=float, default=None, metavar="S", help="write VTK snapshots every S s"
     )
     parser.add_argument(
+        "--reanalyse",
+        action="store_true",
+        help="no simulation: fit, plot and report again the study in --output",
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
-        help="small version (about a minute on two cores): one 60 mm silo filled 72 mm high, "
+        help="small version (about 1.5 min on two cores): one 60 mm silo filled 72 mm high, "
         "D0 = 24 and 27 mm",
     )
     return parser
@@ -1168,6 +1263,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if args.reanalyse:
+            reanalyse(args.output)
+            return 0
         case, orifices = case_from_args(args)
         run_study(args.output, case, orifices, seeds=range(1, args.seeds + 1), jobs=args.jobs)
     except ValueError as err:
