@@ -1,16 +1,25 @@
 // Velocity Verlet for translation and rotation of spheres (DESIGN.md 2.2):
 //   v += dt/2 f/m, w += dt/2 tau/I, x += dt v  |  forces  |  v += dt/2 f/m, w += dt/2 tau/I
+//
+// Inside a run the closing half kick of one step and the opening half kick and drift of the next
+// are one pass over the particles (kick_drift<true>): the same floating-point operations in the
+// same order as two separate passes, so results do not depend on how a run is chunked, with half
+// the memory traffic. The same pass resets the forces (f = m g, tau = 0) once they are used.
 #pragma once
 
 #include "state/particle_store.hpp"
 
 namespace grainscale {
 
-// First half kick and drift of the owned particles. Returns the largest squared displacement
-// from `reference` (positions at the last neighbour-list build).
-Real kick_drift(ParticleStore& ps, Real dt, const std::vector<Vec3>& reference);
+// Opening half kick and drift of the owned particles, preceded by the previous step's closing
+// half kick when kClosingKick; afterwards f = m g and tau = 0 (the start of the next force
+// evaluation). Returns the largest squared displacement from `reference` (positions at the last
+// neighbour-list build).
+template <bool kClosingKick>
+Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
+                const std::vector<Vec3>& reference);
 
-// Second half kick.
+// Closing half kick (the last step of a run).
 void kick(ParticleStore& ps, Real dt);
 
 }  // namespace grainscale

@@ -331,7 +331,8 @@ void Level::validate_periodic_lengths() const {
 
 void Level::save_histories() {
   // Key every entry by its partner (global id / wall index) while the indices are valid.
-  std::vector<GlobalId> keys(pairs_.size());
+  std::vector<GlobalId>& keys = scratch_keys_;
+  keys.resize(pairs_.size());
   for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
   pair_carry_.save(pairs_, keys);
   keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
@@ -362,22 +363,29 @@ void Level::rebuild() {
   // Spatial sort (owned particles in cell order, for cache locality in the force loop); particles
   // that left the box along a non-periodic axis are dropped here and counted as lost.
   grid_.build(ps_.position.data(), ps_.n_owned(), cutoff, 2 * ps_.n_owned() + 64);
-  std::vector<Index> order;
-  order.reserve(ps_.n_owned());
+  std::vector<Index>& order = scratch_order_;
+  order.clear();
   for (Index i : grid_.particles) {
     bool inside = true;
     for (int a = 0; a < 3; ++a)
       inside = inside && (domain_.periodic[a] || domain_.inside(ps_.position[i], a));
     if (inside) order.push_back(i);
   }
+  const bool none_lost = static_cast<Index>(order.size()) == ps_.n_owned();
   lost_ += ps_.n_owned() - static_cast<Index>(order.size());
   ps_.select_owned(order);
-  std::vector<Index> new_origin(order.size());
+  std::vector<Index>& new_origin = scratch_index_;
+  new_origin.resize(order.size());
   for (std::size_t k = 0; k < order.size(); ++k) new_origin[k] = origin_[order[k]];
   origin_.swap(new_origin);
 
   ghosts_.build(ps_, domain_, cutoff);
-  grid_.build(ps_.position.data(), ps_.n_local(), cutoff, 2 * ps_.n_local() + 64);
+  // Without ghosts or lost particles the sorted particles fill the same cells in order: the grid
+  // only needs renumbering, not a second binning.
+  if (ps_.n_ghost() == 0 && none_lost)
+    grid_.renumber_sorted();
+  else
+    grid_.build(ps_.position.data(), ps_.n_local(), cutoff, 2 * ps_.n_local() + 64);
   build_pair_list(ps_, grid_, skin_, pairs_);
   // Mesh bins: once for a wall at rest, again after it moved or the reach grew.
   const Real margin = r_max + skin_;
@@ -391,13 +399,14 @@ void Level::rebuild() {
   mesh_bin_margin_ = std::max(mesh_bin_margin_, margin);
   build_wall_list(ps_, walls_, primitives_.first, skin_, wall_contacts_);
 
-  std::vector<GlobalId> keys(pairs_.size());
+  std::vector<GlobalId>& keys = scratch_keys_;
+  keys.resize(pairs_.size());
   for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
   pair_carry_.restore(origin_, keys, pairs_);
   keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
   wall_carry_.restore(origin_, keys, wall_contacts_);
-  pair_carry_ = HistoryCarry();
-  wall_carry_ = HistoryCarry();
+  pair_carry_.clear();
+  wall_carry_.clear();
 
   x_at_build_.assign(ps_.position.data(), ps_.position.data() + ps_.n_owned());
   wall_shift_.assign(walls_.size(), 0);
@@ -407,13 +416,14 @@ void Level::rebuild() {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 }
 
-template <class Law, bool kUpdate, bool kStats>
+template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
 void Level::compute_forces(const Law& law) {
   const Index n = ps_.n_owned();
-  for (Index i = 0; i < n; ++i) {
-    ps_.force[i] = ps_.mass[i] * gravity_;
-    ps_.torque[i].setZero();
-  }
+  if constexpr (!kOwnedReset)
+    for (Index i = 0; i < n; ++i) {
+      ps_.force[i] = ps_.mass[i] * gravity_;
+      ps_.torque[i].setZero();
+    }
   for (Index g = n; g < ps_.n_local(); ++g) {
     ps_.force[g].setZero();
     ps_.torque[g].setZero();
@@ -432,11 +442,14 @@ void Level::compute_forces(const Law& law) {
 template <class Law>
 void Level::run_with(const Law& law, std::int64_t steps) {
   if (!lists_valid_) rebuild();
-  if (!forces_valid_) compute_forces<Law, false, true>(law);
+  if (!forces_valid_) compute_forces<Law, false, true, false>(law);
   forces_valid_ = true;
   const Real half_skin = 0.5 * skin_;
   for (std::int64_t s = 0; s < steps; ++s) {
-    const Real max_d2 = kick_drift(ps_, dt_, x_at_build_);
+    // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
+    // which also resets the owned forces to m g.
+    const Real max_d2 = s == 0 ? kick_drift<false>(ps_, dt_, gravity_, x_at_build_)
+                               : kick_drift<true>(ps_, dt_, gravity_, x_at_build_);
     Real wall_shift = 0;
     for (std::size_t k = 0; k < walls_.size(); ++k) {
       wall_shift_[k] += walls_[k].advance(dt_, wall_reach_[k]);
@@ -445,16 +458,20 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     ++step_;
     time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;
     apply_insertions_and_outlets();  // may add/remove particles: lists become invalid
+    // Inserted particles start with zero force: then the owned forces are set again.
+    const bool owned_reset = lists_valid_;
     if (!lists_valid_ || !(std::sqrt(comm_.max(max_d2)) + wall_shift <= half_skin))
       rebuild();
     else
       ghosts_.forward(ps_);
     if (s + 1 == steps)
-      compute_forces<Law, true, true>(law);
+      compute_forces<Law, true, true, false>(law);
+    else if (owned_reset)
+      compute_forces<Law, true, false, true>(law);
     else
-      compute_forces<Law, true, false>(law);
-    kick(ps_, dt_);
+      compute_forces<Law, true, false, false>(law);
   }
+  if (steps > 0) kick(ps_, dt_);
 }
 
 void Level::run(std::int64_t steps) {

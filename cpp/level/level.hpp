@@ -115,7 +115,8 @@ class Level {
  private:
   template <class Law>
   void run_with(const Law& law, std::int64_t steps);
-  template <class Law, bool kUpdate, bool kStats>
+  // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
+  template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
   void compute_forces(const Law& law);
   void prepare();
   void validate_periodic_lengths() const;
@@ -152,6 +153,9 @@ class Level {
   GhostExchange ghosts_;
   Communicator comm_;
   std::vector<Vec3> x_at_build_;
+  // Rebuild scratch kept between rebuilds: fresh large buffers would cost page faults each time.
+  std::vector<Index> scratch_order_, scratch_index_;
+  std::vector<GlobalId> scratch_keys_;
   ContactStats stats_;
 
   GlobalId next_id_ = 0;

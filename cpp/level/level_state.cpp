@@ -79,7 +79,7 @@ LevelState Level::save_state() {
   std::visit(
       [&](const auto& law) {
         if (!lists_valid_) rebuild();
-        if (!forces_valid_) compute_forces<std::decay_t<decltype(law)>, false, true>(law);
+        if (!forces_valid_) compute_forces<std::decay_t<decltype(law)>, false, true, false>(law);
       },
       law_);
   forces_valid_ = true;

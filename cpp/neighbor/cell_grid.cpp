@@ -44,8 +44,17 @@ void CellGrid::build(const Vec3* x, Index n, Real min_cell, std::size_t max_cell
   }
   for (int c = 0; c < nc; ++c) cell_start[c + 1] += cell_start[c];
   particles.resize(n);
-  std::vector<Index> fill(cell_start.begin(), cell_start.end() - 1);
-  for (Index i = 0; i < n; ++i) particles[fill[cell_of[i]]++] = i;
+  fill_.assign(cell_start.begin(), cell_start.end() - 1);
+  for (Index i = 0; i < n; ++i) particles[fill_[cell_of[i]]++] = i;
+}
+
+void CellGrid::renumber_sorted() {
+  const int nc = n_cells();
+  for (int c = 0; c < nc; ++c)
+    for (Index k = cell_start[c]; k < cell_start[c + 1]; ++k) {
+      particles[k] = k;
+      cell_of[k] = c;
+    }
 }
 
 }  // namespace grainscale

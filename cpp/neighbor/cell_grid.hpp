@@ -16,6 +16,9 @@ class CellGrid {
   // Bins points x[0, n). The grid never has more than max(max_cells, 1) cells: sparse systems
   // get larger cells instead of a huge empty grid.
   void build(const Vec3* x, Index n, Real min_cell, std::size_t max_cells);
+  // After the points were reordered to `particles` (point k is now the old particles[k]), makes
+  // the grid describe the new order: same cells, particles = 0, 1, ..., n - 1.
+  void renumber_sorted();
 
   std::array<int, 3> dims{1, 1, 1};
   std::vector<Index> cell_start;  // n_cells + 1 offsets into `particles`
@@ -29,6 +32,7 @@ class CellGrid {
   int cell_id(int cx, int cy, int cz) const { return cx + dims[0] * (cy + dims[1] * cz); }
 
  private:
+  std::vector<Index> fill_;  // build scratch
   Vec3 origin_ = Vec3::Zero();
   Vec3 inv_edge_ = Vec3::Ones();
 };

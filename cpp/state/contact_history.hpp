@@ -19,6 +19,12 @@ class HistoryCarry {
   // save() ran (-1 for particles added since).
   void restore(const std::vector<Index>& origin, const std::vector<GlobalId>& partner_key,
                ContactList& list) const;
+  // Forgets the saved entries, keeping the buffers (rebuilds reuse them).
+  void clear() {
+    first_.clear();
+    keys_.clear();
+    values_.clear();
+  }
   bool empty() const { return keys_.empty(); }
   std::size_t size() const { return keys_.size(); }
 

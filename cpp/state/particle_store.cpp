@@ -105,10 +105,10 @@ void gather(SharedArray<T>& a, const std::vector<Index>& order, std::vector<T>& 
 
 void ParticleStore::select_owned(const std::vector<Index>& order) {
   if (n_local_ != n_owned_) throw std::logic_error("ParticleStore::select_owned with ghosts");
-  std::vector<Vec3> sv;
-  std::vector<Real> sr;
-  std::vector<std::int32_t> si;
-  std::vector<GlobalId> sg;
+  std::vector<Vec3>& sv = scratch_vec_;
+  std::vector<Real>& sr = scratch_real_;
+  std::vector<std::int32_t>& si = scratch_int_;
+  std::vector<GlobalId>& sg = scratch_id_;
   gather(position, order, sv);
   gather(velocity, order, sv);
   gather(angular_velocity, order, sv);

@@ -45,6 +45,11 @@ class ParticleStore {
 
  private:
   void resize_all(Index n);
+  // select_owned scratch, kept so that sorting at every rebuild does not allocate.
+  std::vector<Vec3> scratch_vec_;
+  std::vector<Real> scratch_real_;
+  std::vector<std::int32_t> scratch_int_;
+  std::vector<GlobalId> scratch_id_;
   Index n_owned_ = 0;
   Index n_local_ = 0;
 };
