@@ -188,19 +188,29 @@ void Level::apply_insertions_and_outlets() {
 
 void Level::apply_outlets() {
   std::vector<Index> gone;
-  std::vector<char> taken;
+  std::vector<char> taken;  // a particle inside two outlets is counted by the first
   for (Outlet& outlet : outlets_) {
     if (!outlet.due(step_)) continue;
-    taken.resize(ps_.n_owned(), 0);
+    const Region& region = outlet.spec().region;
+    // Most particles are far from an outlet: a bounding-box test first (this runs every step).
+    Vec3 lo, hi;
+    region.bounds(lo, hi);
     std::int64_t count = 0;
     Real mass = 0;
-    for (Index i = 0; i < ps_.n_owned(); ++i)
-      if (!taken[i] && outlet.spec().region.contains(wrapped(domain_, ps_.position[i]))) {
-        taken[i] = 1;  // a particle inside two outlets is counted by the first
-        gone.push_back(i);
-        ++count;
-        mass += ps_.mass[i];
+    for (Index i = 0; i < ps_.n_owned(); ++i) {
+      const Vec3 x = wrapped(domain_, ps_.position[i]);
+      if (x[0] < lo[0] || x[1] < lo[1] || x[2] < lo[2] || x[0] > hi[0] || x[1] > hi[1] ||
+          x[2] > hi[2] || !region.contains(x))
+        continue;
+      if (!taken.empty() && taken[i]) continue;
+      if (outlets_.size() > 1) {
+        taken.resize(ps_.n_owned(), 0);
+        taken[i] = 1;
       }
+      gone.push_back(i);
+      ++count;
+      mass += ps_.mass[i];
+    }
     if (count > 0) outlet.record(time_, count, mass);
   }
   if (!gone.empty()) remove_owned(gone);

@@ -16,6 +16,26 @@ def hertz_contact_time(
     effective_radius: float, effective_mass: float, effective_youngs: float, impact_velocity: float
 ) -> float: ...
 
+class Interaction:
+    """Per-material-pair properties read by the contact laws (cpp/contact/interaction.hpp)."""
+
+    def __init__(self) -> None: ...
+    restitution: float
+    friction: float
+    rolling_friction: float
+    rolling_damping: float
+    normal_stiffness: float
+    tangential_stiffness: float
+    characteristic_velocity: float
+    eepa_exponent: float
+    loading_stiffness: float
+    unloading_ratio: float
+    adhesive_stiffness: float
+    pull_off_force: float
+    adhesion_exponent: float
+
+def supported_contact_laws() -> list[str]: ...
+
 # --- insertion (cpp/bindings/export_insert.cpp) ---
 class SizeDistribution:
     @staticmethod
@@ -61,14 +81,17 @@ class Face:
 class Level:
     def __init__(self, lo: Vec3, hi: Vec3, periodic: tuple[bool, bool, bool]) -> None: ...
     def add_material(self, density: float, youngs_modulus: float, poisson_ratio: float) -> int: ...
-    def set_hertz_mindlin(
+    def set_contact_law(
         self,
-        restitution: float,
-        friction: float,
+        normal: str,
+        rolling: str,
         limit_force: bool,
         tangential_damping: bool,
         incremental: bool,
     ) -> None: ...
+    def contact_law_name(self) -> str: ...
+    def set_interaction(self, i: int, j: int, interaction: Interaction) -> None: ...
+    def set_default_interaction(self, interaction: Interaction) -> None: ...
     def set_gravity(self, g: Vec3) -> None: ...
     def set_time_step(self, time_step: float, force: bool) -> None: ...
     def set_skin(self, skin: float) -> None: ...
@@ -84,6 +107,39 @@ class Level:
     def add_rectangle_wall(
         self, corner: Vec3, edge1: Vec3, edge2: Vec3, velocity: Vec3, material: int
     ) -> int: ...
+    def add_cylinder_wall(
+        self,
+        point: Vec3,
+        axis: Vec3,
+        radius: float,
+        length: float,
+        inside: bool,
+        velocity: Vec3,
+        material: int,
+    ) -> int: ...
+    def add_mesh_wall(
+        self,
+        vertices: npt.NDArray[np.float64],
+        triangles: npt.NDArray[np.int32],
+        origin: Vec3,
+        velocity: Vec3,
+        material: int,
+    ) -> int: ...
+    def set_wall_motion(
+        self, index: int, velocity: Vec3, angular_velocity: Vec3, origin: Vec3
+    ) -> None: ...
+    def set_wall_servo(
+        self,
+        index: int,
+        enabled: bool,
+        direction: Vec3,
+        target_force: float,
+        gain: float,
+        max_speed: float,
+    ) -> None: ...
+    def wall_velocity(self, index: int) -> Vec3: ...
+    def wall_origin(self, index: int) -> Vec3: ...
+    def wall_vertices(self, index: int) -> npt.NDArray[np.float64]: ...
     def num_walls(self) -> int: ...
     def wall_force(self, index: int) -> Vec3: ...
     def wall_torque(self, index: int) -> Vec3: ...
@@ -117,6 +173,10 @@ class Level:
     def contacts(self) -> dict[str, Any]: ...
     def neighbor_pairs(self) -> npt.NDArray[np.int64]: ...
     def view(self, name: str) -> npt.NDArray[Any]: ...
+    # --- checkpoint (cpp/bindings/export_checkpoint.cpp) ---
+    def save_state(self) -> dict[str, Any]: ...
+    def load_state(self, state: dict[str, Any]) -> None: ...
+    def signature(self) -> str: ...
     # --- insertion and outlets (cpp/bindings/export_insert.cpp) ---
     def pack(
         self,
