@@ -1,0 +1,273 @@
+"""scale(): map a reference ParameterSet and a size ratio h to the set of a scaled system.
+
+Pure functions: nothing is mutated, every input object is replaced by a scaled copy (objects a
+scheme leaves unchanged are returned as they are, so per-pair keys keep matching).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, TypeVar
+
+from .._validate import positive
+from ..contact import EEPA, ContactLaw, HertzMindlin, Linear
+from ..dist import Discrete, Distribution, LogNormal, Monodisperse, Normal, Uniform
+from ..geometry import Cylinder, Mesh, Plane, Rectangle, Servo, Wall
+from ..materials import Material
+from .parameters import ParameterSet, Particles
+from .table import Similarity, broken_similarities, factors
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Scaled:
+    """Result of :func:`scale`.
+
+    Attributes:
+        params: the scaled parameter set.
+        h: the size ratio.
+        scheme, dimension: as requested.
+        factors: quantity -> numeric factor h**p applied (the table of ``scheme`` plus
+            ``youngs_modulus``, whose exponent depends on the contact law).
+        broken: similarity numbers the scheme does not preserve, for this parameter set.
+    """
+
+    params: ParameterSet
+    h: float
+    scheme: str
+    dimension: int
+    factors: dict[str, float]
+    broken: list[Similarity]
+
+
+def _modulus_exponent(table: dict[str, float], law: ContactLaw) -> float:
+    """Exponent of E (and G) that gives the law's forces the table's force factor.
+
+    Hertz F ~ E R^(1/2) d^(3/2) (Hertz 1882); linear k from E, v_c ~ E^(4/5) R^(2/5) m^(1/5)
+    v^(2/5) (LIGGGHTS hooke; must match normal_stiffness); EEPA k1 = 2 E R (n = 1) or
+    4/3 E R^(1/2) (n = 1.5). Zero for exact and cg; only the representative-particle schemes,
+    which keep the overlap while raising the force, need stiffer materials.
+    """
+    # Rational arithmetic: an exponent that should vanish must be exactly 0 (h**1e-16 != 1).
+    t = {k: Fraction(v) for k, v in table.items()}
+    f, r, d = t["force"], t["radius"], t["overlap"]
+    if isinstance(law, Linear):
+        p = Fraction(5, 4) * (
+            t["normal_stiffness"]
+            - Fraction(2, 5) * r
+            - Fraction(1, 5) * t["mass"]
+            - Fraction(2, 5) * t["characteristic_velocity"]
+        )
+    elif isinstance(law, EEPA) and law.exponent == 1:
+        p = f - r - d
+    else:
+        p = f - r / 2 - Fraction(3, 2) * d
+    return float(p)
+
+
+def _times(x: Any, factor: float) -> Any:
+    """x * factor for a number or a tuple of numbers; factor 1 returns x itself."""
+    if factor == 1 or x is None:
+        return x
+    if isinstance(x, tuple):
+        return tuple(float(v) * factor for v in x)
+    return float(x) * factor
+
+
+def _replace(obj: T, changes: dict[str, Any]) -> T:
+    """dataclasses.replace that returns obj itself when nothing changes."""
+    changed = {k: v for k, v in changes.items() if v is not getattr(obj, k)}
+    return dataclasses.replace(obj, **changed) if changed else obj  # type: ignore[type-var]
+
+
+class _Mapper:
+    """Applies one scheme's factors h**p to every kind of parameter object."""
+
+    def __init__(self, h: float, exponents: dict[str, float], law: ContactLaw) -> None:
+        self.h = h
+        self.p = exponents
+        self.f = {name: h**p for name, p in exponents.items()}
+        self.law = law
+        self.materials: dict[Material, Material] = {}
+
+    def material(self, m: Material | None) -> Material | None:
+        if m is None:
+            return None
+        if m not in self.materials:
+            e = _times(m.youngs_modulus, self.f["youngs_modulus"])
+            self.materials[m] = _replace(m, {"youngs_modulus": e})
+        return self.materials[m]
+
+    def length(self, x: Any) -> Any:
+        """A length or point of the system (points scale about the origin)."""
+        return _times(x, self.f["domain_length"])
+
+    def wall(self, w: Wall) -> Wall:
+        changes: dict[str, Any] = {
+            "material": self.material(w.material),
+            "velocity": _times(w.velocity, self.f["velocity"]),
+        }
+        if isinstance(w, Cylinder | Mesh):
+            changes["angular_velocity"] = _times(
+                w.angular_velocity, self.f["wall_angular_velocity"]
+            )
+        if isinstance(w, Plane):
+            changes["point"] = self.length(w.point)
+        elif isinstance(w, Rectangle):
+            for name in ("corner", "edge1", "edge2"):
+                changes[name] = self.length(getattr(w, name))
+        elif isinstance(w, Cylinder):
+            for name in ("point", "radius", "length"):
+                changes[name] = self.length(getattr(w, name))
+        elif isinstance(w, Mesh):
+            g = self.f["domain_length"]
+            changes["vertices"] = w.vertices if g == 1 else w.vertices * g
+            changes["origin"] = self.length(w.origin)
+        return _replace(w, changes)
+
+    def servo(self, s: Servo) -> Servo:
+        f = self.f
+        return _replace(
+            s,
+            {
+                "gain": _times(s.gain, f["servo_gain"]),
+                "max_speed": _times(s.max_speed, f["velocity"]),
+                "target_force": _times(s.target_force, f["wall_force"]),
+                "target_stress": _times(s.target_stress, f["stress"]),
+                "area": _times(s.area, f["area"]),
+            },
+        )
+
+    def law_fields(self, values: Any, n: float) -> dict[str, Any]:
+        """Scaled law-specific fields of a law or a Pair (None stays None)."""
+        f, p, h = self.f, self.p, self.h
+        out: dict[str, Any] = {}
+        if isinstance(self.law, Linear):
+            for name in ("normal_stiffness", "tangential_stiffness", "characteristic_velocity"):
+                out[name] = _times(getattr(values, name), f[name])
+        if isinstance(self.law, EEPA):
+            # k1 in N/m^n: a contact force over overlap^n. The adhesive branch k_adh d^chi and
+            # f0 are cohesion (van der Waals type, Thakur et al. 2016) forces.
+            k1 = h ** (p["force"] - n * p["overlap"])
+            out["loading_stiffness"] = _times(values.loading_stiffness, k1)
+            out["pull_off_force"] = _times(values.pull_off_force, f["pull_off_force"])
+            chi = 1.0 if values.adhesion_exponent is None else values.adhesion_exponent
+            k_adh = h ** (p["pull_off_force"] - chi * p["overlap"])
+            out["adhesive_stiffness"] = _times(values.adhesive_stiffness, k_adh)
+        return out
+
+    def contact(self, law: ContactLaw) -> ContactLaw:
+        n = getattr(law, "exponent", 1.0)
+        pairs = {
+            (self.material(a), self.material(b)): _replace(p, self.law_fields(p, n))
+            for (a, b), p in law.pairs.items()
+        }
+        changes = self.law_fields(law, n)
+        if pairs != law.pairs:
+            changes["pairs"] = pairs
+        return _replace(law, changes)
+
+    def particles(self, p: Particles) -> Particles:
+        f = self.f
+        return Particles(
+            position=p.position * f["domain_length"],
+            radius=p.radius * f["radius"],
+            material=self.material(p.material),  # type: ignore[arg-type]
+            velocity=None if p.velocity is None else p.velocity * f["velocity"],
+            angular_velocity=None
+            if p.angular_velocity is None
+            else p.angular_velocity * f["angular_velocity"],
+        )
+
+    def distribution(self, d: Distribution) -> Distribution:
+        g = self.f["radius"]
+        if isinstance(d, Monodisperse):
+            return Monodisperse(d.radius * g)
+        if isinstance(d, Uniform):
+            return Uniform(d.min * g, d.max * g)
+        if isinstance(d, Normal):
+            return Normal(d.mean * g, d.std * g, _times(d.min, g), _times(d.max, g))
+        if isinstance(d, LogNormal):
+            return LogNormal(d.median * g, d.sigma, _times(d.min, g), _times(d.max, g))
+        if isinstance(d, Discrete):
+            return Discrete(tuple(r * g for r in d.radii), d.weights, d.fractions)
+        raise ValueError(f"scale: unsupported size distribution {d!r}")
+
+
+def _has_cohesion(law: ContactLaw) -> bool:
+    if not isinstance(law, EEPA):
+        return False
+    entries = [law, *law.pairs.values()]
+    return any((e.pull_off_force or 0) != 0 or (e.adhesive_stiffness or 0) != 0 for e in entries)
+
+
+def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int = 3) -> Scaled:
+    """Map the reference set ``params`` to the system whose particles are h times larger.
+
+    Args:
+        params: the reference (fine) parameter set.
+        h: size ratio, > 0 (h > 1 coarsens).
+        scheme: "exact" (Feng & Owen 2014), "cg" (energy-density consistent coarse graining),
+            "sakai" or "spa" (representative-particle schemes, for comparison studies); see
+            :mod:`grainscale.scaling.table` for the factors and their sources.
+        dimension: 3, or 2 for discs per unit thickness.
+
+    Returns:
+        :class:`Scaled` with the new set, the factors and the broken similarity numbers.
+
+    Example:
+        >>> import grainscale as gs
+        >>> ref = gs.scaling.ParameterSet(domain=gs.Box((0, 0, 0), (0.1, 0.1, 0.1)),
+        ...                               time_step=1e-6, skin=2e-4)
+        >>> s = gs.scaling.scale(ref, 2.0)
+        >>> s.params.time_step, s.params.gravity[2], s.broken
+        (2e-06, -4.905, [])
+        >>> [b.name for b in gs.scaling.scale(ref, 2.0, "cg").broken]
+        ['froude', 'size_ratio', 'inertial_number', 'time_ratio']
+    """
+    if not isinstance(params, ParameterSet):
+        raise ValueError(f"scale.params must be a scaling.ParameterSet, got {params!r}")
+    hv = positive("scale", "h", h)
+    table = factors(scheme, dimension)  # validates scheme and dimension
+    law = params.contact
+    if not isinstance(law, HertzMindlin | Linear | EEPA):
+        raise ValueError(
+            f"scale: contact law {type(law).__name__} has no scaling rules "
+            "(supported: HertzMindlin, Linear, EEPA)"
+        )
+    if params.particles and table["domain_length"] != table["radius"]:
+        raise ValueError(
+            f"scale.params.particles must be empty for scheme {scheme!r}: only an exact scaling "
+            "maps individual particles (a coarse system holds other particles); give a size "
+            "distribution (ParameterSet.size) and insert instead"
+        )
+    m = _Mapper(hv, dict(table, youngs_modulus=_modulus_exponent(table, law)), law)
+    f = m.f
+    out = ParameterSet(
+        domain=_scaled_box(params, m),
+        contact=m.contact(law),
+        gravity=_times(params.gravity, f["gravity"]),
+        time_step=_times(params.time_step, f["time_step"]),
+        skin=_times(params.skin, f["skin"]),
+        walls=tuple(m.wall(w) for w in params.walls),
+        servos={k: m.servo(s) for k, s in params.servos.items()},
+        particles=tuple(m.particles(p) for p in params.particles),
+        size=None if params.size is None else m.distribution(params.size),
+        materials=tuple(m.material(x) for x in params.materials),  # type: ignore[misc]
+    )
+    broken = broken_similarities(
+        scheme,
+        hv,
+        dimension,
+        gravity=any(g != 0 for g in params.gravity),
+        cohesion=_has_cohesion(law),
+    )
+    return Scaled(out, hv, scheme, dimension, f, broken)
+
+
+def _scaled_box(params: ParameterSet, m: _Mapper) -> Any:
+    d = params.domain
+    return _replace(d, {"lo": m.length(d.lo), "hi": m.length(d.hi)})
