@@ -63,6 +63,7 @@ DIMENSIONS = {
     "rolling_friction": (0, 0, 0, 0),
     "rolling_damping": (0, 0, 0, 0),
     "poisson_ratio": (0, 0, 0, 0),
+    "particle_count": (0, 0, 0, 0),
 }
 
 
@@ -110,6 +111,9 @@ def test_2d_tables_drop_one_power_for_extensive_quantities(scheme: str) -> None:
         if factors(scheme, 3)[name] == 0 and name in ("wall_force", "mass_rate", "area"):
             continue
         if name == "servo_gain" and t3[name] == 0:
+            continue
+        if name == "particle_count":  # h^-3 spheres, h^-2 discs per unit thickness
+            assert t2[name] == t3[name] * 2 / 3
             continue
         assert t2[name] == t3[name] + t, f"{scheme}: {name}"
 
@@ -313,6 +317,35 @@ def test_exact_maps_walls_servos_and_particles() -> None:
     cg = scale(ParameterSet(domain=BOX, walls=walls, servos=servos), h, "cg").params
     assert all(a is b for a, b in zip(cg.walls, walls, strict=True))
     assert cg.servos[1] is servos[1]
+
+
+def test_insertions_and_outlets() -> None:
+    region = gs.Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.1))
+    face = gs.insert.RectangleFace(corner=(0, 0, 0.2), edge1=(0.1, 0, 0), edge2=(0, 0.1, 0))
+    ref = ParameterSet(
+        domain=BOX,
+        time_step=1e-6,
+        insertions=[
+            gs.insert.Pack(region, radius=1e-3, material=A, count=800, velocity=(0, 0, -1)),
+            gs.insert.Stream(face, mass_rate=0.5, radius=1e-3, material=A, every=1e-3, start=0.1),
+        ],
+        outlets=[gs.insert.Outlet(region, every=10)],
+    )
+    exact = scale(ref, 2.0, "exact").params
+    pack, stream = exact.insertions
+    assert pack.count == 800 and pack.region.hi == (0.2, 0.2, 0.2)
+    assert pack.radius == gs.dist.Monodisperse(2e-3) and pack.velocity == (0, 0, -1)
+    assert stream.mass_rate == 2.0 and stream.every == 2e-3 and stream.start == 0.2
+    assert stream.face.corner == (0, 0, 0.4) and stream.face.edge1 == (0.2, 0, 0)
+    assert exact.outlets[0].every == 10 and exact.outlets[0].region.hi == (0.2, 0.2, 0.2)
+    cg = scale(ref, 2.0, "cg").params
+    pack, stream = cg.insertions
+    assert pack.count == 100 and pack.region is region  # h^-3 as many in the same region
+    assert stream.mass_rate == 0.5 and stream.every == 1e-3 and stream.face is face
+    assert stream.radius == gs.dist.Monodisperse(2e-3)
+    assert cg.outlets[0].every == 5  # the same process interval at twice the time step
+    with pytest.raises(ValueError, match=r"Pack\.count must stay >= 1 after scaling"):
+        scale(ref, 20.0, "cg")
 
 
 @pytest.mark.parametrize(

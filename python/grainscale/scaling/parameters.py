@@ -12,6 +12,7 @@ from .._validate import positive, vector3
 from ..contact import EEPA, ContactLaw, HertzMindlin, Linear
 from ..dist import Distribution, as_distribution
 from ..geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo, Wall
+from ..insert import Outlet, Pack, Stream
 from ..materials import Material
 from ..simulation import Simulation
 
@@ -83,7 +84,9 @@ class ParameterSet:
         servos: wall index -> Servo for the walls under force/stress control.
         particles: particle groups with positions (only an exact scaling can map them).
         size: size distribution of particles still to insert (radius, m), or None.
-        materials: further materials to register (e.g. for later insertion), in order.
+        insertions: Pack and Stream operations, inserted / registered in order.
+        outlets: Outlet operations.
+        materials: further materials to register, in order.
     """
 
     domain: Box
@@ -95,6 +98,8 @@ class ParameterSet:
     servos: Mapping[int, Servo] = field(default_factory=dict)
     particles: Sequence[Particles] = ()
     size: Distribution | None = None
+    insertions: Sequence[Pack | Stream] = ()
+    outlets: Sequence[Outlet] = ()
     materials: Sequence[Material] = ()
 
     def __post_init__(self) -> None:
@@ -131,6 +136,14 @@ class ParameterSet:
         for m in self.materials:
             if not isinstance(m, Material):
                 raise ValueError(f"ParameterSet.materials must hold Material, got {m!r}")
+        for op in self.insertions:
+            if not isinstance(op, Pack | Stream):
+                raise ValueError(f"ParameterSet.insertions must hold Pack or Stream, got {op!r}")
+        for op in self.outlets:
+            if not isinstance(op, Outlet):
+                raise ValueError(f"ParameterSet.outlets must hold Outlet, got {op!r}")
+        object.__setattr__(self, "insertions", tuple(self.insertions))
+        object.__setattr__(self, "outlets", tuple(self.outlets))
         object.__setattr__(self, "walls", walls)
         object.__setattr__(self, "servos", servos)
         object.__setattr__(self, "particles", particles)
@@ -142,6 +155,7 @@ class ParameterSet:
         found: list[Material] = []
         candidates: list[Material | None] = [p.material for p in self.particles]
         candidates += [w.material for w in self.walls]
+        candidates += [op.material for op in self.insertions]
         candidates += list(self.materials)
         candidates += [m for key in self.contact.pairs for m in key]
         for m in candidates:
@@ -152,7 +166,8 @@ class ParameterSet:
 
 def build_simulation(params: ParameterSet, **options: Any) -> Simulation:
     """A Simulation set up from ``params``: domain, law, gravity, time step, skin, materials,
-    walls with their servos and the particle groups (in order, so ids follow the groups).
+    walls with their servos, the particle groups (in order, so ids follow the groups), then the
+    insertions (packs placed now, streams registered) and the outlets.
 
     Args:
         params: the parameter set.
@@ -180,4 +195,8 @@ def build_simulation(params: ParameterSet, **options: Any) -> Simulation:
             velocity=group.velocity,
             angular_velocity=group.angular_velocity,
         )
+    for op in params.insertions:
+        sim.insert(op)
+    for outlet in params.outlets:
+        sim.add_outlet(outlet)
     return sim

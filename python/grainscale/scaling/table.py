@@ -66,6 +66,7 @@ _TABLE: dict[str, tuple[float, ...]] = {
     "cohesion_energy_density": (0, 0, 0, 0, 0, 0, 1, 1),
     "pull_off_force": (2, 1, 2, 1, 2, 1, 3, 2),
     "mass_rate": (2, 1, 0, 0, 0, 0, 0, 0),
+    "particle_count": (0, 0, -3, -2, -3, -2, -3, -2),
     "servo_gain": (-2, -1, 0, 0, 0, 0, 0, 0),
     "characteristic_velocity": (0, 0, 0, 0, 0, 0, 0, 0),
     "restitution": (0, 0, 0, 0, 0, 0, 0, 0),

@@ -14,7 +14,8 @@ from typing import Any, TypeVar
 from .._validate import positive
 from ..contact import EEPA, ContactLaw, HertzMindlin, Linear
 from ..dist import Discrete, Distribution, LogNormal, Monodisperse, Normal, Uniform
-from ..geometry import Cylinder, Mesh, Plane, Rectangle, Servo, Wall
+from ..geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo, Wall
+from ..insert import Outlet, Pack, RectangleFace, Region, Stream
 from ..materials import Material
 from .parameters import ParameterSet, Particles
 from .table import Similarity, broken_similarities, factors
@@ -141,6 +142,46 @@ class _Mapper:
             },
         )
 
+    def region(self, r: Region) -> Region:
+        if isinstance(r, Box):
+            return _replace(r, {"lo": self.length(r.lo), "hi": self.length(r.hi)})
+        return self.wall(r)  # type: ignore[return-value]
+
+    def insertion(self, op: Pack | Stream) -> Pack | Stream:
+        f = self.f
+        changes: dict[str, Any] = {
+            "radius": self.distribution(op.radius),
+            "material": self.material(op.material),
+            "velocity": _times(op.velocity, f["velocity"]),
+        }
+        if isinstance(op, Pack):
+            changes["region"] = self.region(op.region)
+            if op.count is not None and f["particle_count"] != 1:
+                count = round(op.count * f["particle_count"])
+                if count < 1:
+                    raise ValueError(
+                        f"scale: Pack.count must stay >= 1 after scaling, got {op.count!r} x "
+                        f"{f['particle_count']:.3g}; give a volume_fraction instead"
+                    )
+                changes["count"] = count
+            return _replace(op, changes)
+        face = op.face
+        if isinstance(face, RectangleFace):
+            moved: Any = {n: self.length(getattr(face, n)) for n in ("corner", "edge1", "edge2")}
+        else:
+            moved = {"centre": self.length(face.centre), "radius": self.length(face.radius)}
+        changes["face"] = _replace(face, moved)
+        changes["mass_rate"] = _times(op.mass_rate, f["mass_rate"])
+        for name in ("start", "stop", "every"):
+            changes[name] = _times(getattr(op, name), f["time"])
+        return _replace(op, changes)
+
+    def outlet(self, o: Outlet) -> Outlet:
+        # `every` counts steps: it follows process time over the time step, at least 1
+        steps = self.f["time"] / self.f["time_step"]
+        every = o.every if steps == 1 else max(1, round(o.every * steps))
+        return _replace(o, {"region": self.region(o.region), "every": every})
+
     def law_fields(self, values: Any, n: float) -> dict[str, Any]:
         """Scaled law-specific fields of a law or a Pair (None stays None)."""
         f, p, h = self.f, self.p, self.h
@@ -184,6 +225,8 @@ class _Mapper:
 
     def distribution(self, d: Distribution) -> Distribution:
         g = self.f["radius"]
+        if g == 1:
+            return d
         if isinstance(d, Monodisperse):
             return Monodisperse(d.radius * g)
         if isinstance(d, Uniform):
@@ -247,7 +290,7 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
     m = _Mapper(hv, dict(table, youngs_modulus=_modulus_exponent(table, law)), law)
     f = m.f
     out = ParameterSet(
-        domain=_scaled_box(params, m),
+        domain=m.region(params.domain),
         contact=m.contact(law),
         gravity=_times(params.gravity, f["gravity"]),
         time_step=_times(params.time_step, f["time_step"]),
@@ -256,6 +299,8 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
         servos={k: m.servo(s) for k, s in params.servos.items()},
         particles=tuple(m.particles(p) for p in params.particles),
         size=None if params.size is None else m.distribution(params.size),
+        insertions=tuple(m.insertion(op) for op in params.insertions),
+        outlets=tuple(m.outlet(o) for o in params.outlets),
         materials=tuple(m.material(x) for x in params.materials),  # type: ignore[misc]
     )
     broken = broken_similarities(
@@ -266,8 +311,3 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
         cohesion=_has_cohesion(law),
     )
     return Scaled(out, hv, scheme, dimension, f, broken)
-
-
-def _scaled_box(params: ParameterSet, m: _Mapper) -> Any:
-    d = params.domain
-    return _replace(d, {"lo": m.length(d.lo), "hi": m.length(d.hi)})
