@@ -160,9 +160,22 @@ def test_cg_eepa_stiffness_linear_and_pull_off_quadratic() -> None:
     )
     assert s.params.size == gs.dist.Uniform(h * 1e-3, h * 2e-3)
     assert s.factors["youngs_modulus"] == 1.0
+    # k_adh in N/m^chi scales as h^(2 - chi); a Pair takes chi from the law
+    chi2 = scale(_eepa_reference(adhesion_exponent=2.0), h, "cg").params.contact
+    assert chi2.adhesive_stiffness == 50.0 and chi2.pairs[(A, B)].adhesive_stiffness == 10.0
     # with exponent 1.5, k1 in N/m^1.5 scales as h^(2 - 1.5)
     s15 = scale(_eepa_reference(exponent=1.5), h, "cg")
     assert s15.params.contact.loading_stiffness == pytest.approx(1e4 * math.sqrt(h), rel=1e-15)
+
+
+def test_2d_modulus_keeps_the_3d_laws_consistent() -> None:
+    """Discs of unit thickness with the 3-D Hertz formula: F = 4/3 E* sqrt(R d) d grows as h^2
+    at E fixed, the 2-D table wants force per thickness x h, so E carries 1/h."""
+    for scheme in ("exact", "cg"):
+        s = scale(ParameterSet(domain=BOX, materials=(A,)), 2.0, scheme, dimension=2)
+        assert s.factors["youngs_modulus"] == 0.5
+        assert s.params.materials[0].youngs_modulus == A.youngs_modulus / 2
+        assert scale(ParameterSet(domain=BOX), 2.0, scheme).factors["youngs_modulus"] == 1.0
 
 
 def test_cg_linear_spring_and_rolling() -> None:

@@ -12,7 +12,7 @@ from fractions import Fraction
 from typing import Any, TypeVar
 
 from .._validate import positive
-from ..contact import EEPA, ContactLaw, HertzMindlin, Linear
+from ..contact import EEPA, ContactLaw, Linear
 from ..dist import Discrete, Distribution, LogNormal, Monodisperse, Normal, Uniform
 from ..geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo, Wall
 from ..insert import Outlet, Pack, RectangleFace, Region, Stream
@@ -49,8 +49,10 @@ def _modulus_exponent(table: dict[str, float], law: ContactLaw) -> float:
 
     Hertz F ~ E R^(1/2) d^(3/2) (Hertz 1882); linear k from E, v_c ~ E^(4/5) R^(2/5) m^(1/5)
     v^(2/5) (LIGGGHTS hooke; must match normal_stiffness); EEPA k1 = 2 E R (n = 1) or
-    4/3 E R^(1/2) (n = 1.5). Zero for exact and cg; only the representative-particle schemes,
-    which keep the overlap while raising the force, need stiffer materials.
+    4/3 E R^(1/2) (n = 1.5). Zero for exact and cg in 3-D; the representative-particle schemes,
+    which keep the overlap while raising the force, need stiffer materials. In 2-D these 3-D
+    formulas applied to discs give N where the table wants N per unit thickness, so E takes
+    1/h (exact, cg): a plane-strain disc law (force per thickness ~ E* d) would keep E.
     """
     # Rational arithmetic: an exponent that should vanish must be exactly 0 (h**1e-16 != 1).
     t = {k: Fraction(v) for k, v in table.items()}
@@ -195,7 +197,9 @@ class _Mapper:
             k1 = h ** (p["force"] - n * p["overlap"])
             out["loading_stiffness"] = _times(values.loading_stiffness, k1)
             out["pull_off_force"] = _times(values.pull_off_force, f["pull_off_force"])
-            chi = 1.0 if values.adhesion_exponent is None else values.adhesion_exponent
+            chi = values.adhesion_exponent
+            if chi is None:  # a Pair without its own exponent uses the law's
+                chi = self.law.adhesion_exponent
             k_adh = h ** (p["pull_off_force"] - chi * p["overlap"])
             out["adhesive_stiffness"] = _times(values.adhesive_stiffness, k_adh)
         return out
@@ -275,12 +279,7 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
         raise ValueError(f"scale.params must be a scaling.ParameterSet, got {params!r}")
     hv = positive("scale", "h", h)
     table = factors(scheme, dimension)  # validates scheme and dimension
-    law = params.contact
-    if not isinstance(law, HertzMindlin | Linear | EEPA):
-        raise ValueError(
-            f"scale: contact law {type(law).__name__} has no scaling rules "
-            "(supported: HertzMindlin, Linear, EEPA)"
-        )
+    law = params.contact  # one of the laws with rules here (ParameterSet checks it)
     if params.particles and table["domain_length"] != table["radius"]:
         raise ValueError(
             f"scale.params.particles must be empty for scheme {scheme!r}: only an exact scaling "
