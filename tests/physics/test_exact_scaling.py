@@ -25,7 +25,7 @@ from grainscale.scaling import ParameterSet, Particles, build_simulation, scale
 GLASS = gs.Material(density=2500, youngs_modulus=1e7, poisson_ratio=0.3, name="soft glass")
 STEEL = gs.Material(density=7800, youngs_modulus=4e7, poisson_ratio=0.29, name="soft steel")
 L, H_BOX = 0.04, 0.08  # box edge and height (m)
-DT = 4e-6  # s; > 30 steps per contact for the stiffest (EEPA steel-wall) contacts
+DT = 4e-6  # s; >= 24 steps per loading for the stiffest (EEPA k1 = 2 E* R*, steel-wall) contacts
 
 
 def _laws() -> dict[str, gs.contact.ContactLaw]:
