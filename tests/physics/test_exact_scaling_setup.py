@@ -69,19 +69,18 @@ def reference(dist: gs.dist.Distribution) -> ParameterSet:
     )
 
 
-def _state(sim: gs.Simulation) -> dict[str, np.ndarray]:
+def _particle_arrays(sim: gs.Simulation) -> dict[str, np.ndarray]:
     with sim.particles(writable=False) as p:
         order = np.argsort(p.id)
-        out = {n: np.array(getattr(p, n)[order]) for n in ("id", "position", "velocity", "force")}
-    out["angular_velocity"] = _spin(sim)
+        names = ("id", "position", "velocity", "angular_velocity", "force")
+        return {n: np.array(getattr(p, n)[order]) for n in names}
+
+
+def _state(sim: gs.Simulation) -> dict[str, np.ndarray]:
+    out = _particle_arrays(sim)
     out["paddle"] = sim.mesh_walls()[0]["vertices"]
     out["lid"] = sim.wall_position(2)
     return out
-
-
-def _spin(sim: gs.Simulation) -> np.ndarray:
-    with sim.particles(writable=False) as p:
-        return np.array(p.angular_velocity[np.argsort(p.id)])
 
 
 @pytest.mark.parametrize("name", list(DISTRIBUTIONS))
@@ -110,3 +109,37 @@ def test_insertion_outlets_and_moving_walls_scale_bit_for_bit(name: str) -> None
     assert contacts > 20
     assert a.streams[0].inserted_count > 0 and a.outlets[0].removed_count > 0
     assert a.streams[0].inserted_mass * h**3 == b.streams[0].inserted_mass
+
+
+def test_periodic_box_scales_bit_for_bit() -> None:
+    """Particles crossing periodic sides (wrapping and ghost images) under exact scaling."""
+    h = 2.0
+    box = gs.Box(lo=(0, 0, 0), hi=(0.02, 0.02, 0.03), periodic=(True, True, False))
+    ref = ParameterSet(
+        domain=box,
+        contact=HertzMindlin(restitution=0.5, friction=0.5),
+        time_step=5e-6,
+        skin=2e-4,
+        walls=[Plane(point=(0, 0, 0), normal=(0, 0, 1))],
+        insertions=[
+            Pack(
+                gs.Box(lo=(0, 0, 0.001), hi=(0.02, 0.02, 0.02)),
+                radius=DISTRIBUTIONS["uniform"],
+                material=SOFT,
+                volume_fraction=0.3,
+                velocity=(1.0, 0.5, -0.3),
+                seed=1,
+            )
+        ],
+    )
+    a, b = build_simulation(ref), build_simulation(scale(ref, h, "exact").params)
+    crossed = 0
+    for _ in range(3):
+        x0 = _particle_arrays(a)["position"][:, 0]
+        a.run(steps=1000, progress=False)
+        b.run(steps=1000, progress=False)
+        sa, sb = _particle_arrays(a), _particle_arrays(b)
+        crossed += int(np.sum(sa["position"][:, 0] < x0 - 0.01))  # wrapped across x = 0.02
+        for key, p in (("position", 1), ("velocity", 0), ("force", 2)):
+            np.testing.assert_array_equal(sb[key], sa[key] * h**p, err_msg=key)
+    assert crossed > 10 and a.num_contacts() > 20

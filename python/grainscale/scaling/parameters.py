@@ -139,9 +139,9 @@ class ParameterSet:
         for op in self.insertions:
             if not isinstance(op, Pack | Stream):
                 raise ValueError(f"ParameterSet.insertions must hold Pack or Stream, got {op!r}")
-        for op in self.outlets:
-            if not isinstance(op, Outlet):
-                raise ValueError(f"ParameterSet.outlets must hold Outlet, got {op!r}")
+        for outlet in self.outlets:
+            if not isinstance(outlet, Outlet):
+                raise ValueError(f"ParameterSet.outlets must hold Outlet, got {outlet!r}")
         object.__setattr__(self, "insertions", tuple(self.insertions))
         object.__setattr__(self, "outlets", tuple(self.outlets))
         object.__setattr__(self, "walls", walls)

@@ -13,7 +13,15 @@ from typing import Any, TypeVar
 
 from .._validate import positive
 from ..contact import EEPA, ContactLaw, Linear
-from ..dist import Discrete, Distribution, LogNormal, Monodisperse, Normal, Uniform
+from ..dist import (
+    Discrete,
+    Distribution,
+    LogNormal,
+    Monodisperse,
+    Normal,
+    Uniform,
+    as_distribution,
+)
 from ..geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo, Wall
 from ..insert import Outlet, Pack, RectangleFace, Region, Stream
 from ..materials import Material
@@ -144,10 +152,11 @@ class _Mapper:
             },
         )
 
+    def box(self, b: Box) -> Box:
+        return _replace(b, {"lo": self.length(b.lo), "hi": self.length(b.hi)})
+
     def region(self, r: Region) -> Region:
-        if isinstance(r, Box):
-            return _replace(r, {"lo": self.length(r.lo), "hi": self.length(r.hi)})
-        return self.wall(r)  # type: ignore[return-value]
+        return self.box(r) if isinstance(r, Box) else self.wall(r)  # type: ignore[return-value]
 
     def insertion(self, op: Pack | Stream) -> Pack | Stream:
         f = self.f
@@ -227,7 +236,8 @@ class _Mapper:
             else p.angular_velocity * f["angular_velocity"],
         )
 
-    def distribution(self, d: Distribution) -> Distribution:
+    def distribution(self, d: Distribution | float) -> Distribution:
+        d = as_distribution(d, "scale", "radius")
         g = self.f["radius"]
         if g == 1:
             return d
@@ -247,7 +257,7 @@ class _Mapper:
 def _has_cohesion(law: ContactLaw) -> bool:
     if not isinstance(law, EEPA):
         return False
-    entries = [law, *law.pairs.values()]
+    entries: list[Any] = [law, *law.pairs.values()]
     return any((e.pull_off_force or 0) != 0 or (e.adhesive_stiffness or 0) != 0 for e in entries)
 
 
@@ -289,7 +299,7 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
     m = _Mapper(hv, dict(table, youngs_modulus=_modulus_exponent(table, law)), law)
     f = m.f
     out = ParameterSet(
-        domain=m.region(params.domain),
+        domain=m.box(params.domain),
         contact=m.contact(law),
         gravity=_times(params.gravity, f["gravity"]),
         time_step=_times(params.time_step, f["time_step"]),
