@@ -7,7 +7,9 @@
 // LinearNormal (Hooke spring–dashpot; LIGGGHTS normal_model_hooke.h for the derived k_n):
 //   F = k_n d with k_n given per material pair, or
 //   k_n = 16/15 sqrt(R*) E* (15 m* v_c^2 / (16 sqrt(R*) E*))^(1/5) (the linear spring with the
-//   same maximum overlap as Hertz at impact speed v_c); k_t given or 2/7 k_n.
+//   same maximum overlap as Hertz at impact speed v_c), evaluated as 16/15 E* R* u^(1/5) with
+//   u = 15 m* v_c^2 / (16 E* R*^3) (core/hertz_impact.hpp: exactly scale invariant); k_t given
+//   or 2/7 k_n.
 // EEPANormal (Thakur, Morrissey, Sun, Chen & Ooi 2014, Granular Matter 16:383; Thakur, Ooi &
 //   Ahmadian 2016, Powder Technol. 293:130, Eq. 2), exponent n in {1, 1.5}:
 //     loading            F = f0 + k1 d^n                 if k2 (d^n - dp^n) >= k1 d^n
@@ -27,6 +29,7 @@
 
 #include "contact/contact_input.hpp"
 #include "contact/interaction.hpp"
+#include "core/hertz_impact.hpp"
 #include "state/material_table.hpp"
 
 namespace grainscale {
@@ -76,9 +79,9 @@ struct LinearNormal {
     if (!(kn > 0)) {
       kn = history[0];
       if (kn == 0) {
-        const Real a = std::sqrt(c.r_eff) * p.effective_youngs;
-        const Real v = p.characteristic_velocity;
-        kn = (16.0 / 15.0) * a * std::pow(15 * c.m_eff * v * v / (16 * a), 0.2);
+        const Real u =
+            hertz_impact_number(c.m_eff, p.characteristic_velocity, p.effective_youngs, c.r_eff);
+        kn = (16.0 / 15.0) * p.effective_youngs * c.r_eff * std::pow(u, 0.2);
         history[0] = kn;
       }
     }

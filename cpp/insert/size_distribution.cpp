@@ -77,7 +77,7 @@ SizeDistribution SizeDistribution::lognormal(Real median, Real sigma, Real min, 
     throw_invalid("LogNormal.min", "such that [min, max] holds some probability", min);
   SizeDistribution d;
   d.kind_ = Kind::LogNormal;
-  d.p1_ = mu;
+  d.p1_ = median;
   d.p2_ = sigma;
   d.min_ = min;
   d.max_ = max;
@@ -149,9 +149,11 @@ Real SizeDistribution::sample(Rng& rng) const {
           max_);
     case Kind::LogNormal: {
       if (p2_ == 0) return min_;
+      // r = median exp(sigma z) with bounds from min / median, max / median: ratios, so that
+      // radii scale exactly with the distribution (bit for bit when x 2^k).
       const Real z =
-          truncated_standard_normal((std::log(min_) - p1_) / p2_, (std::log(max_) - p1_) / p2_, u);
-      return std::clamp(std::exp(p1_ + p2_ * z), min_, max_);
+          truncated_standard_normal(std::log(min_ / p1_) / p2_, std::log(max_ / p1_) / p2_, u);
+      return std::clamp(p1_ * std::exp(p2_ * z), min_, max_);
     }
     case Kind::Discrete: {
       // First class whose cumulative probability exceeds u (classes of zero weight never win).

@@ -44,7 +44,7 @@ class SizeDistribution {
 
  private:
   Kind kind_ = Kind::Monodisperse;
-  Real p1_ = 0, p2_ = 0;  // radius | min, max | mean, std | ln median, sigma
+  Real p1_ = 0, p2_ = 0;  // radius | min, max | mean, std | median, sigma
   Real min_ = 0, max_ = 0;
   std::vector<Real> radii_, cumulative_;  // Discrete: radii and cumulative number probability
   Real last_radius_ = 0;                  // Discrete: last radius of non-zero weight

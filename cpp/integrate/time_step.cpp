@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/errors.hpp"
+#include "core/hertz_impact.hpp"
 
 namespace grainscale {
 
@@ -14,7 +15,7 @@ Real rayleigh_time(Real radius, Real density, Real youngs_modulus, Real poisson_
 
 Real hertz_contact_time(Real r_eff, Real m_eff, Real e_eff, Real v0) {
   if (!(v0 > 0)) throw_invalid("hertz_contact_time.impact_velocity", "positive (m/s)", v0);
-  const Real delta_max = std::pow(15 * m_eff * v0 * v0 / (16 * e_eff * std::sqrt(r_eff)), 0.4);
+  const Real delta_max = r_eff * std::pow(hertz_impact_number(m_eff, v0, e_eff, r_eff), 0.4);
   // 2 * integral_0^1 dx / sqrt(1 - x^(5/2)) = 2 * 1.471638 (CASES.md A1)
   return 2.943275 * delta_max / v0;
 }

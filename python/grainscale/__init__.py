@@ -6,7 +6,7 @@ laws in :mod:`grainscale.contact`.
 
 from __future__ import annotations
 
-from . import contact, dist, geometry, insert, io, timestep
+from . import contact, dist, geometry, insert, io, scaling, timestep
 from .geometry import Box, Plane, Rectangle
 from .materials import Material
 from .simulation import ParticleView, Simulation
@@ -25,5 +25,6 @@ __all__ = [
     "geometry",
     "insert",
     "io",
+    "scaling",
     "timestep",
 ]
