@@ -46,7 +46,7 @@ class ClosedMesh {
   TriangleBins ray_bins_;  // triangles binned by their (y, z) extent (x flattened), for rays
   Real volume_ = 0;
   Vec3 lo_ = Vec3::Zero(), hi_ = Vec3::Zero();
-  mutable std::vector<int> scratch_;
+  mutable std::vector<int> scratch_;  // query buffer: one thread per ClosedMesh
 };
 
 }  // namespace grainscale

@@ -34,7 +34,7 @@ class WallClearance {
   };
   std::vector<const Wall*> simple_;
   std::vector<MeshPart> meshes_;
-  mutable std::vector<int> scratch_;
+  mutable std::vector<int> scratch_;  // query buffer: one thread per WallClearance
 };
 
 }  // namespace grainscale

@@ -88,6 +88,37 @@ def octahedron() -> gs.geometry.Mesh:
     return gs.geometry.Mesh(vertices=v, triangles=np.array(tris))
 
 
+def icosphere(subdivisions: int, radius: float, centre: np.ndarray) -> gs.geometry.Mesh:
+    """Closed sphere mesh: an icosahedron subdivided 4^subdivisions times, vertices on the
+    sphere (20 x 4^s triangles, outward normals)."""
+    t = (1 + 5**0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
+         (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]  # fmt: skip
+    vertices = [np.array(p) / np.linalg.norm(p) for p in v]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+             (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+             (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]  # fmt: skip
+    middle: dict[tuple[int, int], int] = {}  # an edge split once is never an edge again
+
+    def mid(a: int, b: int) -> int:
+        key = (min(a, b), max(a, b))
+        if key not in middle:
+            m = vertices[a] + vertices[b]
+            vertices.append(m / np.linalg.norm(m))
+            middle[key] = len(vertices) - 1
+        return middle[key]
+
+    for _ in range(subdivisions):
+        finer = []
+        for a, b, c in faces:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            finer += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = finer
+    return gs.geometry.Mesh(
+        vertices=np.array(vertices) * radius + centre, triangles=np.array(faces)
+    )
+
+
 def pack(sim: gs.Simulation, region, **kw) -> np.ndarray:
     return sim.insert(gs.insert.Pack(region, radius=R, material=GLASS, **kw))
 
@@ -243,6 +274,28 @@ def test_pack_inside_a_closed_prism_mesh_stays_inside_and_clear_of_the_surface()
     side = (x[:, :2] - 0.01) @ normals.T  # distance along each side normal
     assert np.all(apothem - side.max(axis=1) >= r - 1e-15)
     assert np.all((x[:, 2] - z0 >= r - 1e-15) & (z1 - x[:, 2] >= r - 1e-15))
+
+
+def test_pack_inside_a_sphere_mesh_of_5120_triangles_is_inside_every_face_plane():
+    """A convex polyhedron is the intersection of its faces' half-spaces: a sphere is inside
+    and clear of the surface iff it is at least r behind every face plane."""
+    centre = np.array([0.01, 0.01, 0.01])
+    mesh = icosphere(4, 0.0095, centre)
+    assert len(mesh.triangles) == 5120
+    v, t = mesh.vertices, mesh.triangles
+    n = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    region = _core.Region.mesh(v, t)
+    # Divergence theorem: a cone of height (n . a) over each face.
+    exact = float(np.sum(np.einsum("ij,ij->i", n, v[t[:, 0]] - centre)) / 6)
+    assert region.volume == pytest.approx(exact, rel=1e-12)
+    assert exact == pytest.approx(4 / 3 * math.pi * 0.0095**3, rel=0.01)
+    sim = gs.Simulation(domain=BOX, contact=LAW)
+    pack(sim, mesh, volume_fraction=0.2, seed=6)
+    x, r = positions(sim)
+    assert np.sum(4 / 3 * np.pi * r**3) == pytest.approx(0.2 * exact, rel=0.01)
+    unit = n / np.linalg.norm(n, axis=1)[:, None]
+    behind = np.einsum("ij,ij->i", unit, v[t[:, 0]])[None, :] - x @ unit.T
+    assert np.all(behind.min(axis=1) >= r - 1e-15)
 
 
 def test_pack_inside_a_hollow_mesh_fills_only_the_shell():
