@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 
+#include "bindings/mesh_arrays.hpp"
 #include "level/level.hpp"
 
 namespace py = pybind11;
@@ -77,6 +78,13 @@ void export_insert(py::module_& m) {
             return Region::cylinder(vec(c), vec(axis), radius, height);
           },
           py::arg("centre"), py::arg("axis"), py::arg("radius"), py::arg("height"))
+      .def_static(
+          "mesh",
+          [](const VertexArray& vertices, const TriangleArray& triangles, const std::string& what) {
+            const TriangleMesh m = mesh_from_arrays(vertices, triangles);
+            return Region::mesh(m.vertices, m.triangles, what);
+          },
+          py::arg("vertices"), py::arg("triangles"), py::arg("what") = "Mesh region")
       .def_property_readonly("volume", &Region::volume)
       .def("bounds",
            [](const Region& r) {

@@ -2,6 +2,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "bindings/mesh_arrays.hpp"
 #include "level/level.hpp"
 
 namespace py = pybind11;
@@ -153,20 +154,9 @@ void export_level(py::module_& m) {
           py::arg("inside"), py::arg("velocity"), py::arg("material"))
       .def(
           "add_mesh_wall",
-          [](Level& l, const Array3& vertices,
-             const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>& triangles,
-             Vec3A origin, Vec3A velocity, int material) {
-            if (vertices.ndim() != 2 || vertices.shape(1) != 3)
-              throw py::value_error("Mesh.vertices must have shape (V, 3)");
-            if (triangles.ndim() != 2 || triangles.shape(1) != 3)
-              throw py::value_error("Mesh.triangles must have shape (T, 3)");
-            auto mesh = std::make_shared<TriangleMesh>();
-            const Real* v = vertices.data();
-            for (py::ssize_t k = 0; k < vertices.shape(0); ++k)
-              mesh->vertices.emplace_back(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
-            const std::int32_t* t = triangles.data();
-            for (py::ssize_t k = 0; k < triangles.shape(0); ++k)
-              mesh->triangles.push_back({t[3 * k], t[3 * k + 1], t[3 * k + 2]});
+          [](Level& l, const VertexArray& vertices, const TriangleArray& triangles, Vec3A origin,
+             Vec3A velocity, int material) {
+            auto mesh = std::make_shared<TriangleMesh>(mesh_from_arrays(vertices, triangles));
             Wall w;
             w.shape = WallShape::Mesh;
             w.mesh = mesh;

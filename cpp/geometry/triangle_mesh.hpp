@@ -7,10 +7,10 @@
 #pragma once
 
 #include <array>
-#include <cstdint>
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/triangle_bins.hpp"
 
 namespace grainscale {
 
@@ -28,19 +28,17 @@ class TriangleMesh {
   // Closest point of triangle t to x, with the feature it lies on.
   TriangleHit closest(int t, const Vec3& x) const;
   // Bins triangles (bounding boxes grown by `margin`) into cells of at least `min_cell`.
-  void build_bins(Real margin, Real min_cell);
+  void build_bins(Real margin, Real min_cell) {
+    bins_.build(vertices, triangles, {}, margin, min_cell);
+  }
   // Triangles whose grown bounding box may contain x (valid until the mesh moves by more than
   // the margin allows; the level rebuilds bins with its lists).
-  void candidates(const Vec3& x, std::vector<int>& out) const;
+  void candidates(const Vec3& x, std::vector<int>& out) const { bins_.candidates(x, out); }
   // Largest distance of a vertex from `origin` (bounds the motion of a rotating mesh).
   Real radius_about(const Vec3& origin) const;
 
  private:
-  Vec3 origin_ = Vec3::Zero();
-  Real inv_cell_ = 0;
-  std::array<std::int64_t, 3> dims_{0, 0, 0};
-  std::vector<std::int64_t> cell_keys_;  // sorted cell ids of the (cell, triangle) entries
-  std::vector<int> cell_triangles_;      // triangle of each entry
+  TriangleBins bins_;
 };
 
 }  // namespace grainscale

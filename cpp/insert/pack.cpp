@@ -17,16 +17,18 @@ Real sphere_volume(Real r) { return (4.0 / 3.0) * M_PI * r * r * r; }
 // Near jamming almost every uniform trial position is taken. The sampler then restricts trials to
 // voxels of the centres' bounding box that may still hold a free centre for radius rho (the
 // smallest radius still to place: space covered for rho is covered for every larger radius).
-// A voxel is dropped when one stored sphere covers it; a trial that fails in a voxel splits it
-// into its eight children (down to edge h0 / 2^9), which resolves space covered by several
-// spheres together. Voxels are drawn with probability proportional to their volume, then a
+// A voxel is dropped when no centre in it keeps a sphere of radius rho inside the region, when
+// one wall blocks all of it, or when one stored sphere covers it; a trial that fails in a voxel
+// splits it into its eight children (down to edge h0 / 2^9), which resolves space covered by
+// several spheres together. Voxels are drawn with probability proportional to their volume, then a
 // uniform point in it: uniform over the union of the voxels, which holds every free position, so
 // rejection keeps the statistics of random sequential addition exact (the scheme of Zhang &
 // Torquato, Phys. Rev. E 88, 053312, 2013).
 class VoxelSampler {
  public:
-  VoxelSampler(const Region& region, Real rho, const OccupancyGrid& grid)
-      : region_(region), grid_(grid), rho_(rho) {
+  VoxelSampler(const Region& region, Real rho, const OccupancyGrid& grid,
+               const WallClearance& walls)
+      : region_(region), grid_(grid), walls_(walls), rho_(rho) {
     Vec3 lo, hi;
     region.bounds(lo, hi);
     lo.array() += rho;
@@ -101,13 +103,18 @@ class VoxelSampler {
   bool may_hold_centre(const Vec3& lo, int level) const {
     const Real h = edge_[level];
     // A free centre p in the voxel is within half a diagonal of the voxel centre c, so the sphere
-    // (c, rho - half diagonal) lies inside the region; and no single sphere covers the voxel.
-    const Real inner = rho_ - 0.5 * std::sqrt(3.0) * h;
-    if (inner >= 0 && !region_.contains(lo + Vec3::Constant(0.5 * h), inner)) return false;
+    // (c, rho - half diagonal) lies inside the region (Mesh too: the sphere (p, rho) is inside,
+    // and holds it); no single wall blocks the whole voxel; no single sphere covers it.
+    const Real half_diagonal = 0.5 * std::sqrt(3.0) * h;
+    const Real inner = rho_ - half_diagonal;
+    const Vec3 c = lo + Vec3::Constant(0.5 * h);
+    if (inner >= 0 && !region_.contains(c, inner)) return false;
+    if (walls_.blocks(c, half_diagonal, rho_)) return false;
     return !grid_.covers(lo, lo + Vec3::Constant(h), rho_);
   }
   const Region& region_;
   const OccupancyGrid& grid_;
+  const WallClearance& walls_;
   Real rho_ = 0;
   Real edge_[kLevels] = {};
   std::vector<Vec3> voxels_[kLevels];
@@ -144,7 +151,7 @@ std::vector<Real> pack_radii(const PackSpec& spec, Rng& rng) {
 }
 
 Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, OccupancyGrid& grid,
-                          Rng& rng) {
+                          const WallClearance& walls, Rng& rng) {
   Placement out;
   out.position.reserve(radii.size());
   out.radius.reserve(radii.size());
@@ -170,18 +177,23 @@ Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, 
       placed_volume += sphere_volume(r);
       ok = true;
     };
+    // A valid centre: sphere inside the region, clear of the walls and of every stored sphere.
+    auto free_at = [&](const Vec3& x, bool check_region) {
+      return !grid.overlaps(x, r) && (!check_region || spec.region.contains(x, r)) &&
+             walls.clear(x, r);
+    };
     for (int trial = 0; !voxels && trial < direct && !ok; ++trial) {
       const Vec3 x = spec.region.sample(rng, r);
-      if (!grid.overlaps(x, r)) accept(x);
+      if (free_at(x, !spec.region.samples_inside())) accept(x);
     }
     if (!ok && !voxels)
       voxels = std::make_unique<VoxelSampler>(
-          spec.region, *std::min_element(radii.begin() + k, radii.end()), grid);
+          spec.region, *std::min_element(radii.begin() + k, radii.end()), grid, walls);
     for (; !ok && !voxels->empty() && attempt < spec.max_attempts; ++attempt) {
       int level = 0;
       std::size_t slot = 0;
       const Vec3 x = voxels->sample(rng, level, slot);
-      if (spec.region.contains(x, r) && !grid.overlaps(x, r))
+      if (free_at(x, true))
         accept(x);
       else
         voxels->refine(level, slot);

@@ -1,5 +1,6 @@
 // Packing: random non-overlapping placement of particles inside a region (random sequential
-// addition, largest first), avoiding the particles already present. A target is a particle count
+// addition, largest first), avoiding the particles already present and the walls (a sphere may
+// not touch any wall). A target is a particle count
 // or a volume fraction of the region; if some particle finds no free spot after a bounded number
 // of attempts the whole packing fails with an error saying how far it got (nothing is inserted
 // and nothing is silently dropped).
@@ -15,6 +16,7 @@
 #include "insert/occupancy_grid.hpp"
 #include "insert/region.hpp"
 #include "insert/size_distribution.hpp"
+#include "insert/wall_clearance.hpp"
 
 namespace grainscale {
 
@@ -39,8 +41,8 @@ struct Placement {
 std::vector<Real> pack_radii(const PackSpec& spec, Rng& rng);
 
 // Places the radii (in order) in spec.region, avoiding the spheres already in `grid` (placed
-// ones are added to it). Throws std::runtime_error when a particle cannot be placed.
+// ones are added to it) and the walls. Throws std::runtime_error when a particle cannot be placed.
 Placement place_in_region(const PackSpec& spec, const std::vector<Real>& radii, OccupancyGrid& grid,
-                          Rng& rng);
+                          const WallClearance& walls, Rng& rng);
 
 }  // namespace grainscale

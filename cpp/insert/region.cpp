@@ -54,12 +54,22 @@ Region Region::cylinder(const Vec3& centre, const Vec3& axis, Real radius, Real 
   return r;
 }
 
+Region Region::mesh(const std::vector<Vec3>& vertices,
+                    const std::vector<std::array<int, 3>>& triangles, const std::string& what) {
+  Region r;
+  r.kind_ = Kind::Mesh;
+  r.mesh_ = std::make_shared<const ClosedMesh>(vertices, triangles, what);
+  return r;
+}
+
 Real Region::volume() const {
+  if (kind_ == Kind::Mesh) return mesh_->volume();
   if (kind_ == Kind::Cylinder) return M_PI * radius_ * radius_ * height_;
   return std::abs(e_[0].dot(e_[1].cross(e_[2])));
 }
 
 void Region::bounds(Vec3& lo, Vec3& hi) const {
+  if (kind_ == Kind::Mesh) return mesh_->bounds(lo, hi);
   if (kind_ == Kind::Cylinder) {
     const Vec3& w = e_[2];
     for (int a = 0; a < 3; ++a) {
@@ -81,6 +91,7 @@ void Region::bounds(Vec3& lo, Vec3& hi) const {
 }
 
 bool Region::contains(const Vec3& x, Real r) const {
+  if (kind_ == Kind::Mesh) return mesh_->inside(x) && !mesh_->near_surface(x, r);
   const Vec3 q = x - origin_;
   if (kind_ == Kind::Cylinder) {
     const Real z = q.dot(e_[2]);
@@ -99,6 +110,11 @@ bool Region::contains(const Vec3& x, Real r) const {
 }
 
 bool Region::fits(Real r) const {
+  if (kind_ == Kind::Mesh) {
+    Vec3 lo, hi;
+    mesh_->bounds(lo, hi);
+    return 2 * r <= (hi - lo).minCoeff();
+  }
   if (kind_ == Kind::Cylinder) return r <= radius_ && 2 * r <= height_;
   for (int k = 0; k < 3; ++k)
     if (2 * r * dual_[k].norm() > 1) return false;
@@ -114,6 +130,13 @@ Vec3 Region::sample(Rng& rng, Real r) const {
     return origin_ + rho * std::cos(phi) * e_[0] + rho * std::sin(phi) * e_[1] + z * e_[2];
   }
   const Real u[3] = {u0, u1, u2};
+  if (kind_ == Kind::Mesh) {
+    Vec3 lo, hi;
+    mesh_->bounds(lo, hi);
+    Vec3 x;
+    for (int a = 0; a < 3; ++a) x[a] = lo[a] + r + u[a] * (hi[a] - lo[a] - 2 * r);
+    return x;
+  }
   Vec3 x = origin_;
   for (int k = 0; k < 3; ++k) {
     const Real margin = r * dual_[k].norm();

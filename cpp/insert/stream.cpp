@@ -63,8 +63,8 @@ bool StreamInserter::schedule(Real time, Real tolerance) {
   return due && !pending_.empty();
 }
 
-void StreamInserter::place(OccupancyGrid& grid, std::vector<Vec3>& position,
-                           std::vector<Real>& radius) {
+void StreamInserter::place(OccupancyGrid& grid, const WallClearance& walls,
+                           std::vector<Vec3>& position, std::vector<Real>& radius) {
   // A run of consecutive failures means the slab is full: keep the rest for the next batch
   // instead of spending attempts on them.
   const int give_up_after = 32;
@@ -76,7 +76,7 @@ void StreamInserter::place(OccupancyGrid& grid, std::vector<Vec3>& position,
     bool ok = false;
     for (int attempt = 0; attempt < spec_.max_attempts && !ok; ++attempt) {
       const Vec3 x = slab_.sample(rng_, r);
-      if (!grid.overlaps(x, r)) {
+      if (!grid.overlaps(x, r) && walls.clear(x, r)) {
         grid.add(x, r);
         position.push_back(x);
         radius.push_back(r);

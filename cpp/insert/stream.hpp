@@ -1,9 +1,9 @@
 // Stream insertion: particles enter through a face (rectangle or disc) at a mass rate with an
 // initial velocity. Batches are due at t_k = start + k * every; batch k samples (from the size
 // distribution, seeded) the particles for the mass of the interval [t_k, t_k+1) (clipped at
-// `stop`) and places them at random without overlaps in a slab on the downstream side of the
-// face. Particles that find no free spot stay pending and are tried again at the next batch time
-// (also after `stop`, until none is left): nothing is dropped.
+// `stop`) and places them at random without overlaps, and without touching a wall, in a slab on
+// the downstream side of the face. Particles that find no free spot stay pending and are tried
+// again at the next batch time (also after `stop`, until none is left): nothing is dropped.
 //
 // Bookkeeping (s, kg): requested = rate x (min(t, stop) - start)^+ (continuous);
 // scheduled = mass of all sampled particles = inserted + pending. After batch k the scheduled mass
@@ -23,6 +23,7 @@
 #include "insert/occupancy_grid.hpp"
 #include "insert/region.hpp"
 #include "insert/size_distribution.hpp"
+#include "insert/wall_clearance.hpp"
 
 namespace grainscale {
 
@@ -56,10 +57,11 @@ class StreamInserter {
   // Samples the particles of every batch due at `time` (within `tolerance`) into the pending
   // list; returns true when a placement pass is due now.
   bool schedule(Real time, Real tolerance);
-  // Places pending particles (first come, first served) without overlaps with `grid`; placed ones
-  // are appended to position/radius and added to the grid. Stops early after a run of failures
-  // (the slab is full).
-  void place(OccupancyGrid& grid, std::vector<Vec3>& position, std::vector<Real>& radius);
+  // Places pending particles (first come, first served) without overlaps with `grid` and clear
+  // of `walls`; placed ones are appended to position/radius and added to the grid. Stops early
+  // after a run of failures (the slab is full).
+  void place(OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
+             std::vector<Real>& radius);
 
   Real requested_mass(Real time) const;
   Real scheduled_mass() const { return scheduled_mass_; }

@@ -62,7 +62,8 @@ std::pair<GlobalId, Index> Level::pack(const PackSpec& spec) {
   Vec3 lo, hi;
   spec.region.bounds(lo, hi);
   OccupancyGrid grid(lo, hi, radii.front(), ps_, domain_);
-  const Placement p = place_in_region(spec, radii, grid, rng);
+  const WallClearance walls(walls_, lo, hi, radii.front());
+  const Placement p = place_in_region(spec, radii, grid, walls, rng);
 
   const Index n = static_cast<Index>(p.radius.size());
   std::vector<Real> x(3 * n), v(3 * n);
@@ -225,9 +226,11 @@ void Level::run_streams() {
     Vec3 lo, hi;
     s.slab().bounds(lo, hi);
     OccupancyGrid grid(lo, hi, s.spec().radius.max_radius(), ps_, domain_);
+    // The walls where they are now (they moved before this hook in the step).
+    const WallClearance walls(walls_, lo, hi, s.spec().radius.max_radius());
     x.clear();
     r.clear();
-    s.place(grid, x, r);
+    s.place(grid, walls, x, r);
     if (r.empty()) continue;
     const Index n = static_cast<Index>(r.size());
     std::vector<Real> flat(3 * n), v(3 * n);

@@ -4,10 +4,12 @@ Operations executed by the C++ core (cpp/insert/), declared here as validated, f
 parameter sets (SI units):
 
 * :class:`Pack` - random non-overlapping placement of a count or a volume fraction of particles
-  in a region (``gs.Box`` or a finite ``gs.geometry.Cylinder``), avoiding the particles already
-  present; ``sim.insert(Pack(...))`` inserts at once and returns the ids.
+  in a region (``gs.Box``, a finite ``gs.geometry.Cylinder`` or the interior of a closed
+  ``gs.geometry.Mesh``), avoiding the particles already present and the walls;
+  ``sim.insert(Pack(...))`` inserts at once and returns the ids.
 * :class:`Stream` - particles entering through a face (:class:`RectangleFace`,
-  :class:`DiscFace`) at a mass rate with an initial velocity, in batches, without overlaps;
+  :class:`DiscFace`) at a mass rate with an initial velocity, in batches, without overlaps
+  (with particles or walls);
   ``sim.insert(Stream(...))`` registers it (it runs inside ``sim.run``) and returns a
   :class:`StreamHandle` with the mass bookkeeping.
 * :class:`Outlet` - particles whose centre enters a region are deleted and counted;
@@ -35,7 +37,7 @@ import numpy as np
 from . import _core
 from ._validate import non_negative, positive, vector3
 from .dist import Distribution, as_distribution
-from .geometry import Box, Cylinder
+from .geometry import Box, Cylinder, Mesh
 from .materials import Material
 
 if TYPE_CHECKING:
@@ -171,8 +173,11 @@ def random_in_box(
 # --------------------------------------------------------------------------- regions and faces
 
 
-def _core_region(region: Any, owner: str) -> _core.Region:
-    """The core's region for a gs.Box or a finite gs.geometry.Cylinder."""
+def _core_region(region: Any, owner: str, allow_mesh: bool = False) -> _core.Region:
+    """The core's region for a gs.Box, a finite gs.geometry.Cylinder or (allow_mesh) the
+    interior of a closed gs.geometry.Mesh."""
+    if allow_mesh and isinstance(region, Mesh):
+        return _core.Region.mesh(region.vertices, region.triangles, f"{owner}.region (Mesh)")
     if isinstance(region, Box):
         return _core.Region.box(region.lo, region.hi)
     if isinstance(region, Cylinder):
@@ -183,9 +188,12 @@ def _core_region(region: Any, owner: str) -> _core.Region:
         axis = np.asarray(region.axis)
         centre = np.asarray(region.point) + 0.5 * region.length * axis
         return _core.Region.cylinder(tuple(centre), region.axis, region.radius, region.length)
-    raise ValueError(
-        f"{owner}.region must be a grainscale.Box or grainscale.geometry.Cylinder, got {region!r}"
+    kinds = (
+        "grainscale.Box, grainscale.geometry.Cylinder or a closed grainscale.geometry.Mesh"
+        if allow_mesh
+        else "grainscale.Box or grainscale.geometry.Cylinder"
     )
+    raise ValueError(f"{owner}.region must be a {kinds}, got {region!r}")
 
 
 def _material(owner: str, material: Any) -> Material:
@@ -263,15 +271,26 @@ Face = RectangleFace | DiscFace
 class Pack:
     """Random non-overlapping packing of a region (random sequential addition, largest first).
 
-    The spheres lie entirely inside the region and overlap neither each other nor the particles
-    already in the simulation (walls are not checked: keep the region clear of them). Give
-    exactly one of ``count`` and ``volume_fraction``. If a particle finds no free position in
+    The spheres lie entirely inside the region and overlap neither each other, nor the particles
+    already in the simulation, nor any wall (plane, rectangle, cylinder, mesh, where it is at
+    insertion time): a sphere touching a wall, as the contact code sees it, is not a valid
+    position (mesh walls are two-sided: a sphere may sit inside a closed mesh wall if it fits
+    there). Give exactly one of ``count`` and ``volume_fraction`` (a fraction of the region's
+    volume, including any part walls take up). If a particle finds no free position in
     ``max_attempts`` trials, ``sim.insert`` raises ``RuntimeError`` saying how many were placed
-    and inserts nothing. Random sequential addition jams near a volume fraction of 0.38 for equal
-    spheres; denser beds come from letting a looser packing settle.
+    and inserts nothing. Random sequential addition jams near a volume fraction of 0.38 for
+    equal spheres; denser beds come from letting a looser packing settle.
+
+    A closed ``gs.geometry.Mesh`` (e.g. ``Mesh.from_stl``) as region packs its interior: a sphere
+    is inside when its centre is (parity of the crossings of a ray along +x) and it does not
+    cross the surface. The surface must be closed and consistently oriented (every edge shared
+    by exactly two triangles, traversed in opposite directions; identical vertices are merged),
+    else ``ValueError``; the mesh's material and motion are ignored, and it is not added as a
+    wall (pass it to ``sim.add_wall`` too to keep the particles in).
 
     Args:
-        region: ``gs.Box`` or a finite ``gs.geometry.Cylinder``, inside the domain.
+        region: ``gs.Box``, a finite ``gs.geometry.Cylinder`` or a closed
+            ``gs.geometry.Mesh``, inside the domain.
         radius: a ``gs.dist`` distribution, or one radius (m).
         material: the particles' material.
         count: number of particles.
@@ -291,7 +310,7 @@ class Pack:
         50
     """
 
-    region: Region
+    region: Region | Mesh
     _: KW_ONLY
     radius: Distribution | float
     material: Material
@@ -302,7 +321,7 @@ class Pack:
     max_attempts: int = 1000
 
     def __post_init__(self) -> None:
-        _core_region(self.region, "Pack")
+        _core_region(self.region, "Pack", allow_mesh=True)
         object.__setattr__(self, "radius", as_distribution(self.radius, "Pack"))
         _material("Pack", self.material)
         if (self.count is None) == (self.volume_fraction is None):
@@ -329,7 +348,7 @@ class Pack:
 
     def _insert(self, sim: Simulation) -> np.ndarray:
         first, n = sim._level.pack(
-            _core_region(self.region, "Pack"),
+            _core_region(self.region, "Pack", allow_mesh=True),
             cast(Distribution, self.radius)._to_core(),
             -1 if self.count is None else int(self.count),
             -1.0 if self.volume_fraction is None else float(self.volume_fraction),
@@ -352,11 +371,12 @@ class Stream:
     ``stop``); it runs inside ``sim.run`` at the first step with t >= t_k, so results do not
     depend on how ``run`` is chunked. Its particles are drawn from ``radius`` and placed at
     random in a slab on the face's downstream side (the side ``velocity`` points to), of
-    thickness max(2 largest diameters, normal speed x every), avoiding each other and every
-    particle present (walls are not checked: keep the slab clear of them). Particles that find
-    no room stay pending and are retried at the next batch time (also after ``stop``) - never
-    dropped. Keep the stream's volume fraction, mass_rate / (density x face area x normal
-    speed), well below ~0.3, or pending mass accumulates.
+    thickness max(2 largest diameters, normal speed x every), avoiding each other, every
+    particle present and every wall (where it is at the batch time). Particles that find no
+    room (also when a wall takes part of the slab) stay pending and are retried at the next
+    batch time (also after ``stop``) - never dropped. Keep the stream's volume fraction,
+    mass_rate / (density x face area x normal speed), well below ~0.3, or pending mass
+    accumulates.
 
     Args:
         face: :class:`RectangleFace` or :class:`DiscFace` (inside the domain with its slab).
