@@ -7,8 +7,10 @@
 //   poly: d uniform in [1, 3] (size ratio 1:3), spacing 1.05 d_mean = 2.1, skin 0.1 d_min.
 //     Large neighbours overlap (the list build is purely geometric); what matters is the
 //     cell edge set by the largest diameter and the number of candidates per cell.
-// Cell edge = largest diameter + skin, at most 2 N + 64 cells (as in Level::rebuild). The list
-// gets the Hertz-Mindlin history stride (3), so clearing the history is part of the build.
+// Cells of the cut-off = largest diameter + skin (at most 2 N + 64 cells) and, in the same run,
+// of half the cut-off (at most 16 N + 64): CellGrid::build_for_pairs picks the first below a
+// size ratio of 2 and the second from 2 on. The
+// list gets the Hertz-Mindlin history stride (3), so clearing the history is part of the build.
 // Figures: median wall-clock time per owned particle and per list entry (plus thread CPU time,
 // cpu=, and the fastest repetition, min=).
 //
@@ -54,24 +56,39 @@ Row run_case(const std::string& name, Index n, bool poly, int reps) {
   const Real cutoff = 2 * bench::max_radius(ps) + skin;
   bench::spatial_sort(ps, cutoff);
 
+  // Cells of the cut-off (27-cell stencil; Level's binning for size ratios below 2).
   grainscale::CellGrid grid;
-  const std::size_t max_cells = 2 * static_cast<std::size_t>(n) + 64;
   const bench::Timing bin = bench::median_ns(
-      reps, [] {}, [&] { grid.build(ps.position.data(), ps.n_local(), cutoff, max_cells); });
+      reps, [] {},
+      [&] {
+        grid.build(ps.position.data(), ps.n_local(), cutoff, 2 * static_cast<std::size_t>(n) + 64);
+      });
 
   grainscale::ContactList list;
   list.history_stride = 3;
-  grid.build(ps.position.data(), ps.n_local(), cutoff, max_cells);
+  grid.build(ps.position.data(), ps.n_local(), cutoff, 2 * static_cast<std::size_t>(n) + 64);
   const bench::Timing list_t =
       bench::median_ns(reps, [] {}, [&] { grainscale::build_pair_list(ps, grid, skin, list); });
 
-  // Candidates examined by the 27-cell stencil (both orientations of every pair are visited).
+  // In the same run: cells of half the cut-off (5 x 5 x 5 stencil; Level's for ratios >= 2).
+  grainscale::CellGrid fine;
+  fine.build(ps.position.data(), ps.n_local(), 0.5 * cutoff, 16 * static_cast<std::size_t>(n) + 64);
+  grainscale::ContactList fine_list;
+  fine_list.history_stride = 3;
+  const bench::Timing fine_t = bench::median_ns(
+      reps, [] {}, [&] { grainscale::build_pair_list(ps, fine, skin, fine_list); });
+  bench::report("build_pair_list_" + name + "_half_cells", fine_t, n, "ns/particle", n, reps);
+  std::printf("  half-cut-off cells / cut-off cells time ratio: %.3f (wall), %.3f (cpu)\n",
+              fine_t.wall_ns / list_t.wall_ns, fine_t.cpu_ns / list_t.cpu_ns);
+
+  // Candidates examined by the stencil (both orientations of every pair are visited).
   double candidates = 0;
+  const auto R = grid.reach(cutoff);
   for (Index i = 0; i < n; ++i) {
     const auto c = grid.coords(grid.cell_of[i]);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
+    for (int dz = -R[2]; dz <= R[2]; ++dz)
+      for (int dy = -R[1]; dy <= R[1]; ++dy)
+        for (int dx = -R[0]; dx <= R[0]; ++dx) {
           const int cx = c[0] + dx, cy = c[1] + dy, cz = c[2] + dz;
           if (cx < 0 || cy < 0 || cz < 0 || cx >= grid.dims[0] || cy >= grid.dims[1] ||
               cz >= grid.dims[2])
@@ -115,7 +132,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "(medians of %d repetitions: wall clock, and list build in thread CPU time after the |; "
-      "entries = half-list entries; candidates = points in the 27-cell stencil)\n",
+      "entries = half-list entries; candidates = points in the stencil)\n",
       reps);
   return 0;
 }

@@ -356,13 +356,17 @@ void Level::rebuild() {
   ps_.clear_ghosts();
   wrap_periodic(ps_, domain_);
 
-  Real r_max = 0;
-  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
+  Real r_max = 0, r_min = INFINITY;
+  for (Index i = 0; i < ps_.n_owned(); ++i) {
+    r_max = std::max(r_max, ps_.radius[i]);
+    r_min = std::min(r_min, ps_.radius[i]);
+  }
   const Real cutoff = 2 * r_max + skin_;
+  const Real size_ratio = r_max / r_min;
 
   // Spatial sort (owned particles in cell order, for cache locality in the force loop); particles
   // that left the box along a non-periodic axis are dropped here and counted as lost.
-  grid_.build(ps_.position.data(), ps_.n_owned(), cutoff, 2 * ps_.n_owned() + 64);
+  grid_.build_for_pairs(ps_.position.data(), ps_.n_owned(), cutoff, size_ratio);
   std::vector<Index>& order = scratch_order_;
   order.clear();
   for (Index i : grid_.particles) {
@@ -385,7 +389,7 @@ void Level::rebuild() {
   if (ps_.n_ghost() == 0 && none_lost)
     grid_.renumber_sorted();
   else
-    grid_.build(ps_.position.data(), ps_.n_local(), cutoff, 2 * ps_.n_local() + 64);
+    grid_.build_for_pairs(ps_.position.data(), ps_.n_local(), cutoff, size_ratio);
   build_pair_list(ps_, grid_, skin_, pairs_);
   // Mesh bins: once for a wall at rest, again after it moved or the reach grew.
   const Real margin = r_max + skin_;

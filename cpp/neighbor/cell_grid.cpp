@@ -48,6 +48,14 @@ void CellGrid::build(const Vec3* x, Index n, Real min_cell, std::size_t max_cell
   for (Index i = 0; i < n; ++i) particles[fill_[cell_of[i]]++] = i;
 }
 
+std::array<int, 3> CellGrid::reach(Real cutoff) const {
+  // |floor(a) - floor(b)| <= ceil(|a - b|) for cell coordinates a, b (in cell edges).
+  std::array<int, 3> r;
+  for (int a = 0; a < 3; ++a)
+    r[a] = std::min(dims[a] - 1, static_cast<int>(std::ceil(cutoff * inv_edge_[a])));
+  return r;
+}
+
 void CellGrid::renumber_sorted() {
   const int nc = n_cells();
   for (int c = 0; c < nc; ++c)

@@ -9,6 +9,9 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, C
   const Vec3* x = ps.position.data();
   const Real* r = ps.radius.data();
   const GlobalId* id = ps.id.data();
+  Real r_max = 0;
+  for (Index i = 0; i < ps.n_local(); ++i) r_max = std::max(r_max, r[i]);
+  const auto R = grid.reach(2 * r_max + skin);
   list.first.resize(n + 1);
   list.partner.clear();
   for (Index i = 0; i < n; ++i) {
@@ -18,10 +21,10 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, C
     const Real ri = r[i];
     const GlobalId idi = id[i];
     // Cells adjacent along x are adjacent in `grid.particles`, so each (dy, dz) row of the
-    // 3x3x3 stencil is one contiguous range of candidates.
-    const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, grid.dims[0] - 1);
-    for (int cz = std::max(c[2] - 1, 0); cz <= std::min(c[2] + 1, grid.dims[2] - 1); ++cz) {
-      for (int cy = std::max(c[1] - 1, 0); cy <= std::min(c[1] + 1, grid.dims[1] - 1); ++cy) {
+    // stencil is one contiguous range of candidates.
+    const int x0 = std::max(c[0] - R[0], 0), x1 = std::min(c[0] + R[0], grid.dims[0] - 1);
+    for (int cz = std::max(c[2] - R[2], 0); cz <= std::min(c[2] + R[2], grid.dims[2] - 1); ++cz) {
+      for (int cy = std::max(c[1] - R[1], 0); cy <= std::min(c[1] + R[1], grid.dims[1] - 1); ++cy) {
         const Index begin = grid.cell_start[grid.cell_id(x0, cy, cz)];
         const Index end = grid.cell_start[grid.cell_id(x1, cy, cz) + 1];
         for (Index k = begin; k < end; ++k) {

@@ -82,12 +82,13 @@ void add_particle(gs::ParticleStore& ps, GlobalId id, const Vec3& x, Real r,
   ps.add_owned(id, x, v, Vec3::Zero(), r, m, 0.4 * m * r * r, 0);
 }
 
+// Cells of cell_fraction x the cut-off (the pair list widens its stencil for small cells).
 void build_list(const gs::ParticleStore& ps, Real skin, std::size_t max_cells,
-                gs::ContactList& list) {
+                gs::ContactList& list, Real cell_fraction = 1) {
   Real r_max = 0;
   for (Index i = 0; i < ps.n_owned(); ++i) r_max = std::max(r_max, ps.radius[i]);
   gs::CellGrid grid;
-  grid.build(ps.position.data(), ps.n_local(), 2 * r_max + skin, max_cells);
+  grid.build(ps.position.data(), ps.n_local(), cell_fraction * (2 * r_max + skin), max_cells);
   gs::build_pair_list(ps, grid, skin, list);
 }
 
@@ -196,39 +197,42 @@ void test_pair_list_brute() {
     const PairSet expected = brute_force_pairs(ps, skin);
     CHECK(expected.size() > static_cast<std::size_t>(box < 0.1 ? n : 50),
           "too few pairs for a meaningful test: " + std::to_string(expected.size()));
-    // Level's cell cap (2 n + 64), and a tiny cap that forces enlarged cells.
-    for (std::size_t max_cells : {std::size_t(2 * n + 64), std::size_t(7)}) {
-      const std::string tag = "box=" + str(box) + " max_cells=" + std::to_string(max_cells);
-      gs::ContactList list;
-      list.history_stride = 3;
-      build_list(ps, skin, max_cells, list);
-      CHECK(list.first.size() == static_cast<std::size_t>(n) + 1 && list.first[0] == 0 &&
-                list.first[n] == static_cast<Index>(list.size()),
-            tag + ": malformed CSR offsets");
-      CHECK(list.history.size() == 3 * list.size(), tag + ": history size");
-      PairSet got;
-      bool oriented = true, sorted_offsets = true;
-      std::size_t duplicates = 0;
-      for (Index i = 0; i < n; ++i) {
-        sorted_offsets = sorted_offsets && list.first[i] <= list.first[i + 1];
-        for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
-          const Index j = list.partner[k];
-          oriented = oriented && ps.id[i] < ps.id[j];
-          if (!got.insert({std::min(ps.id[i], ps.id[j]), std::max(ps.id[i], ps.id[j])}).second)
-            ++duplicates;
+    // Cells of the cut-off, of half of it (as Level uses) and of 0.3 of it (4 cells of reach);
+    // a generous cap and a tiny cap that forces enlarged cells.
+    for (Real fraction : {1.0, 0.5, 0.3})
+      for (std::size_t max_cells : {std::size_t(16 * n + 64), std::size_t(7)}) {
+        const std::string tag = "box=" + str(box) + " cells=" + str(fraction) +
+                                " x cut-off, max_cells=" + std::to_string(max_cells);
+        gs::ContactList list;
+        list.history_stride = 3;
+        build_list(ps, skin, max_cells, list, fraction);
+        CHECK(list.first.size() == static_cast<std::size_t>(n) + 1 && list.first[0] == 0 &&
+                  list.first[n] == static_cast<Index>(list.size()),
+              tag + ": malformed CSR offsets");
+        CHECK(list.history.size() == 3 * list.size(), tag + ": history size");
+        PairSet got;
+        bool oriented = true, sorted_offsets = true;
+        std::size_t duplicates = 0;
+        for (Index i = 0; i < n; ++i) {
+          sorted_offsets = sorted_offsets && list.first[i] <= list.first[i + 1];
+          for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+            const Index j = list.partner[k];
+            oriented = oriented && ps.id[i] < ps.id[j];
+            if (!got.insert({std::min(ps.id[i], ps.id[j]), std::max(ps.id[i], ps.id[j])}).second)
+              ++duplicates;
+          }
         }
+        CHECK(sorted_offsets, tag + ": offsets not monotonic");
+        CHECK(oriented, tag + ": an entry is not stored at the particle with the smaller id");
+        CHECK(duplicates == 0, tag + ": " + std::to_string(duplicates) + " duplicate entries");
+        std::size_t missing = 0, extra = 0;
+        for (const auto& p : expected) missing += got.count(p) == 0;
+        for (const auto& p : got) extra += expected.count(p) == 0;
+        CHECK(missing == 0 && extra == 0,
+              tag + ": list has " + std::to_string(got.size()) + " pairs, brute force " +
+                  std::to_string(expected.size()) + " (" + std::to_string(missing) + " missing, " +
+                  std::to_string(extra) + " extra)");
       }
-      CHECK(sorted_offsets, tag + ": offsets not monotonic");
-      CHECK(oriented, tag + ": an entry is not stored at the particle with the smaller id");
-      CHECK(duplicates == 0, tag + ": " + std::to_string(duplicates) + " duplicate entries");
-      std::size_t missing = 0, extra = 0;
-      for (const auto& p : expected) missing += got.count(p) == 0;
-      for (const auto& p : got) extra += expected.count(p) == 0;
-      CHECK(missing == 0 && extra == 0,
-            tag + ": list has " + std::to_string(got.size()) + " pairs, brute force " +
-                std::to_string(expected.size()) + " (" + std::to_string(missing) + " missing, " +
-                std::to_string(extra) + " extra)");
-    }
   }
 }
 
