@@ -178,6 +178,10 @@ def report(case: eu.Case, rows: Sequence[dict[str, Any]], wall_clock: float, wor
         f"- sigma_pre = {case.pre_stress / 1e3:g} kPa; platen speed"
         f" {case.platen_speed * 1e3:g} mm/s at every scale; time step = shortest contact"
         f" duration / {case.steps_per_contact:g};",
+        "- values: CASES.md E3 protocol for D, n, chi, k1 ~ R, k2/k1, mu, mu_r and the sigma_pre"
+        " range; our choices: reduced E, density, k_adh = k1 of two mean spheres, f0 = -0.5"
+        " sigma_pre d^2 (cohesion a clear part of the strength), platen speed from the inertial"
+        " number;",
         "- loading strain from the seating stress"
         f" ({ea.SEATING_FRACTION:g} sigma_pre); unloading stiffness: secant over the first"
         f" {ea.UNLOADING_FRACTION:.0%} of the unloading; sigma_c: peak of the area-corrected"
