@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -202,9 +203,6 @@ class RunResult:
     wall_clock: float
     notes: list[str] = field(default_factory=list)
 
-    def as_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
 
 def core_solid_fraction(position: np.ndarray, radius: np.ndarray, die_diameter: float) -> float:
     """Solid fraction of the settled bed away from the walls: volume of the spheres whose
@@ -226,18 +224,25 @@ def _move_wall_to(sim: gs.Simulation, wall: int, z: float) -> None:
     sim.set_wall_motion(wall, velocity=(0.0, 0.0, 0.0))
 
 
-def _settle(sim: gs.Simulation, speed: float, limit: float) -> None:
-    """Run until every particle is slower than ``speed`` (m/s) or for ``limit`` s."""
+def _settle(sim: gs.Simulation, speed: float, limit: float) -> bool:
+    """Run until every particle is slower than ``speed`` (m/s), at most ``limit`` s; returns
+    whether the bed came to rest."""
     end = sim.time + limit
     while sim.time < end:
         sim.run(until=sim.time + 0.01)
         with sim.particles(writable=False) as p:
             if float(np.max(np.linalg.norm(p.velocity, axis=1))) < speed:
-                return
+                return True
+    return False
 
 
 def _drive(
-    sim: gs.Simulation, curve: Curve, area: float, speed: float, record: float, stop: Any
+    sim: gs.Simulation,
+    curve: Curve,
+    area: float,
+    speed: float,
+    record: float,
+    stop: Callable[[Curve], bool],
 ) -> None:
     """Move the platen at ``speed`` (m/s, negative: down), recording every ``record`` m of
     travel, until ``stop(curve)`` is true."""
@@ -260,7 +265,7 @@ def run_test(
     law = params.contact
     dry = dataclasses.replace(law, pull_off_force=0.0, adhesive_stiffness=0.0)
     sim = build_simulation(dataclasses.replace(params, contact=dry), quiet=True)
-    _settle(sim, speed=0.02, limit=0.4)
+    notes = [] if _settle(sim, speed=0.02, limit=0.4) else ["bed still moving after 0.4 s"]
     with sim.particles(writable=False) as p:
         settled = Particles(np.array(p.position), np.array(p.radius), params.insertions[0].material)
     core = core_solid_fraction(settled.position, settled.radius, case.die_diameter)
@@ -278,8 +283,9 @@ def run_test(
     loading, unloading, unconfined = Curve(), Curve(), Curve()
     _drive(sim, loading, area, -speed, record, lambda c: c.stress[-1] >= case.pre_stress)
     _drive(sim, unloading, area, speed, record, lambda c: c.stress[-1] <= 0.0)
-    die = params.walls[DIE]
-    _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + die.length + 4 * float(r.max()))
+    # lifted by the domain height: its lower end clears the sample and everything above it
+    lift = params.domain.hi[2] - params.domain.lo[2]
+    _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + lift)
     sim.run(until=sim.time + 0.02)
     start = float(sim.wall_position(PLATEN)[2])
 
@@ -289,7 +295,6 @@ def run_test(
         return (start - c.height[-1]) / start >= max_unconfined_strain
 
     _drive(sim, unconfined, area, -speed, record, capped)
-    notes = []
     if sim.lost_particles:
         notes.append(f"{sim.lost_particles} particles left the domain")
     return RunResult(
