@@ -59,7 +59,8 @@ struct Wall {
   }
   // Closest-point geometry of a non-mesh wall for sphere centre x; false if there is none
   // (beyond the axial extent of a finite cylinder).
-  inline bool closest(const Vec3& x, WallContact& out) const;
+  // Forced inline: the wall loop calls it for every wall entry every step.
+  [[gnu::always_inline]] inline bool closest(const Vec3& x, WallContact& out) const;
   Vec3 surface_velocity(const Vec3& at) const {
     return velocity + angular_velocity.cross(at - origin);
   }
