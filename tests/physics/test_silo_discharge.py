@@ -16,6 +16,7 @@ Beverloo's W = C rho_b sqrt(g) (D0 - k d)^2.5 over the CASES D1 acceptance range
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -69,7 +70,27 @@ def test_bulk_density_and_beverloo(runs: list[sd.DischargeResult]) -> None:
         assert low < r.rate < high, (r.orifice, low, r.rate, high)
 
 
+def test_seed_scatter_of_repeated_runs(runs: list[sd.DischargeResult]) -> None:
+    again = dataclasses.replace(runs[0], seed=2, rate=1.1 * runs[0].rate)
+    expected = math.log(1.1) / math.sqrt(2)  # sample sd of two logs
+    assert sd.seed_scatter(ORIFICES, [*runs, again]) == pytest.approx(expected, rel=1e-12)
+    assert math.isnan(sd.seed_scatter(ORIFICES, runs))
+
+
 # ------------------------------------------------------------------------------ helpers
+
+
+def test_exponent_interval_brackets_the_true_exponent() -> None:
+    d = 4e-3
+    d0 = np.array([24e-3, 32e-3, 40e-3, 52e-3, 64e-3])
+    w = sd.beverloo_rate(d0, d, 1500.0, c=0.58, k=1.5, exponent=2.5)
+    w = w * np.exp(0.01 * np.array([1.0, -1.0, 0.5, -0.5, 0.0]))  # 1 % scatter
+    lo, hi = sd.exponent_interval(d0, w, d, 1500.0, sigma_log=0.01)
+    assert lo < 2.5 < hi
+    wide = sd.exponent_interval(d0, w, d, 1500.0, sigma_log=0.05)
+    assert wide[0] < lo and wide[1] > hi
+    with pytest.raises(ValueError, match="sigma_log must be positive"):
+        sd.exponent_interval(d0, w, d, 1500.0, sigma_log=0.0)
 
 
 def test_measure_rate_of_a_linear_history() -> None:

@@ -20,18 +20,21 @@ d = 4 mm +/- 5 % (uniform), rho_p = 2500 kg/m^3, nu = 0.3, restitution 0.5, fric
 step 0.2 x the Rayleigh time of the smallest sphere; E = 1e7 Pa (reduced from CASES' 1e8 Pa:
 D0 = 24 mm in a 60 mm silo gave W = 0.0924 kg/s with 1e8 Pa and 0.0929 kg/s with 1e7 Pa).
 
-Each silo is the smallest that satisfies both D_s >= 2.5 D0 (Beverloo et al. 1961) and
-D_s - D0 >= 30 d (Nedderman, Tuezuen, Savage & Houlsby 1982, Chem. Eng. Sci. 37:1597: beyond
-that the rate does not depend on the silo diameter); the bed is half a silo diameter deep.
-The default study, D0 = 24, 32, 40, 52 and 64 mm (D0/d = 6-16), one seed, is about 6e9
-particle-steps (20-40 minutes on two cores). ``--quick``: one 60 mm silo with a 50 mm bed,
-D0 = 24 and 28 mm, under a minute on two cores. The runs go to worker processes (``--jobs``,
-default: one per CPU); ``--reanalyse`` fits, plots and reports a finished study again without
+Each silo is the smallest with D_s >= 2.5 D0 (Beverloo et al. 1961) and D_s - D0 >= 20 d.
+Nedderman et al. (1982, Chem. Eng. Sci. 37:1597) put the silo-independence limit near 30 d;
+at D0 = 24 mm (constant head, 60 mm bed, one seed) this code gave W = 0.0926, 0.0913 and
+0.0970 kg/s in silos 60, 104 and 144 mm wide (D_s - D0 = 9, 20 and 30 d), differences within
+the 4-7 % scatter between runs, so 20 d is used. The bed is max(0.5 D_s, 2 D0) deep.
+The default study, D0 = 24, 32, 40, 52 and 64 mm (D0/d = 6-16), two seeds, 7500-44000
+particles per silo, is about 6e9 particle-steps (50 minutes on two shared cores).
+``--quick``: one 60 mm silo with a 50 mm bed, D0 = 24 and 28 mm, about a minute on two
+cores. The runs go to worker processes (``--jobs``, default: one per CPU); ``--first-seed``
+adds seeds to a study; ``--reanalyse`` fits, plots and reports a finished study again without
 simulating.
 
 Written to the output directory:
-    discharge.png             discharged mass vs time per orifice (20-70 % window fit) and
-                              W vs D0 with the Beverloo fits, plus the linearised form
+    discharge.png             rate history per orifice (draining: discharged fraction and the
+                              20-70 % fit), W vs D0 with the Beverloo fits, the linearised form
                               (W / (C rho_b sqrt g))^(2/5) vs D0
     report.md                 set-up, measured rates, fits and what the full study would be
     results.json              every number of the report (per run and fitted)
@@ -870,6 +873,8 @@ class StudyResult:
     fit: BeverlooFit | None  # C and k, exponent 2.5
     fit_free: BeverlooFit | None  # C, k and the exponent
     fit_exponent: BeverlooFit | None  # C and the exponent, k = 1.5
+    scatter: float  # relative scatter of one run's W between seeds (NaN for one seed)
+    exponent_range: tuple[float, float] | None  # 1-sigma profile interval of the free n
     wall_clock: float
     output: Path
     plot: Path
@@ -908,6 +913,40 @@ def _aggregate(orifices: list[float], runs: list[DischargeResult]):
         std.append(float(np.std(w, ddof=1)) if len(w) > 1 else math.nan)
         rho.append(float(np.mean([r.core_bulk_density for r in mine])))
     return mean, std, rho
+
+
+def exponent_interval(
+    orifice: Sequence[float],
+    rate: Sequence[float],
+    diameter: float,
+    bulk_density: float | Sequence[float],
+    sigma_log: float,
+) -> tuple[float, float]:
+    """Exponents n in [1, 4] (step 0.01) whose best (C, k) fit is within one standard error of
+    the free fit: sum of squared log residuals <= its minimum + sigma_log^2 (Delta chi^2 = 1
+    for log residuals with standard deviation ``sigma_log``, the profile-likelihood interval).
+    """
+    if not (math.isfinite(sigma_log) and sigma_log > 0):
+        raise ValueError(f"exponent_interval.sigma_log must be positive, got {sigma_log!r}")
+    grid = np.arange(1.0, 4.0 + 1e-9, 0.01)
+    ss = np.empty_like(grid)
+    for i, n in enumerate(grid):
+        fit = fit_beverloo(orifice, rate, diameter, bulk_density, exponent=float(n))
+        ss[i] = fit.rms_log_residual**2 * fit.points
+    inside = grid[ss <= ss.min() + sigma_log**2]
+    return float(inside.min()), float(inside.max())
+
+
+def seed_scatter(orifices: Sequence[float], runs: Sequence[DischargeResult]) -> float:
+    """Pooled standard deviation of log W between seeds of the same orifice (NaN without
+    repeated seeds): the relative scatter of one run's rate."""
+    ss, dof = 0.0, 0
+    for d0 in orifices:
+        lw = np.log([r.rate for r in runs if r.orifice == d0 and r.rate > 0 and not r.clogged])
+        if len(lw) > 1:
+            ss += float(np.sum((lw - lw.mean()) ** 2))
+            dof += len(lw) - 1
+    return math.sqrt(ss / dof) if dof else math.nan
 
 
 def fit_all(
@@ -998,6 +1037,12 @@ def _finish(
     """Fit, plot and report the runs of a study."""
     mean, std, rho = _aggregate(orifices, runs)
     fits = fit_all(orifices, mean, rho, case.diameter)
+    scatter = seed_scatter(orifices, runs)
+    n_range = None
+    if fits[1] is not None and math.isfinite(scatter):
+        valid = [(a, w, b) for a, w, b in zip(orifices, mean, rho, strict=True) if w > 0]
+        d0, w, b = (list(x) for x in zip(*valid, strict=True))
+        n_range = exponent_interval(d0, w, case.diameter, b, scatter / math.sqrt(len(seeds)))
     result = StudyResult(
         case=case,
         orifices=orifices,
@@ -1009,6 +1054,8 @@ def _finish(
         fit=fits[0],
         fit_free=fits[1],
         fit_exponent=fits[2],
+        scatter=scatter,
+        exponent_range=n_range,
         wall_clock=wall,
         output=out,
         plot=out / "discharge.png",
@@ -1085,6 +1132,8 @@ def _write_json(path: Path, r: StudyResult) -> None:
         "fit_free": None if r.fit_free is None else dataclasses.asdict(r.fit_free),
         "fit_k_1_5": None if r.fit_exponent is None else dataclasses.asdict(r.fit_exponent),
         "acceptance_i": acceptance(r),
+        "seed_scatter_log": r.scatter,
+        "exponent_1sigma_range": r.exponent_range,
         "runs": [run.summary() for run in r.runs],
         "wall_clock_s": r.wall_clock,
         "jobs": r.jobs,
@@ -1100,7 +1149,7 @@ def _plot(path: Path, r: StudyResult) -> None:
 
     case, d = r.case, r.case.diameter
     rho = float(np.mean(r.bulk_density))
-    fig, (ax_m, ax_w, ax_lin) = plt.subplots(1, 3, figsize=(15.0, 5.0), dpi=130)
+    fig, (ax_m, ax_w, ax_lin) = plt.subplots(1, 3, figsize=(15.0, 5.0), dpi=110)
     fig.suptitle(
         f"Flat-bottomed silo discharge (CASES D1): {case.describe()};\n"
         f"d = {d * 1e3:g} mm ± {case.diameter_spread:.0%}, ρ_p = {case.density:g} kg/m³, "
@@ -1108,41 +1157,10 @@ def _plot(path: Path, r: StudyResult) -> None:
         f"μ_r = {case.rolling_friction:g}"
     )
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    head = case.constant_head
-    for i, d0 in enumerate(r.orifices):
-        color = colors[i % len(colors)]
-        for j, run in enumerate(x for x in r.runs if x.orifice == d0):
-            label = f"D0 = {d0 * 1e3:g} mm ({d0 / d:.3g} d)" if j == 0 else None
-            y = run.mass if head else run.mass / run.inventory
-            ax_m.plot(run.time, y, color=color, linewidth=1.2, label=label)
-            if head:
-                t0, t1 = case.measure_window(d0)
-                sel = (run.time >= t0) & (run.time <= t1)
-            else:
-                sel = (run.mass >= WINDOW[0] * run.inventory) & (
-                    run.mass <= WINDOW[1] * run.inventory
-                )
-            if math.isfinite(run.rate) and np.count_nonzero(sel) >= 3:
-                t = run.time[sel]
-                p = np.polyfit(t, y[sel], 1)
-                ax_m.plot(t, np.polyval(p, t), "--", color="k", linewidth=0.8)
-            if run.clogged:
-                ax_m.plot(run.time[-1], y[-1], "x", color=color, markersize=8)
-    if head:
-        ax_m.axvline(case.transient, color="0.6", linestyle=":", linewidth=1)
-        ax_m.set_ylabel("discharged mass (kg)")
-        ax_m.set_title("discharged mass (dashed: linear fit over the steady window)", fontsize=10)
-        ax_m.set_ylim(bottom=0.0)
+    if case.constant_head:
+        _plot_rate_history(ax_m, r, colors)
     else:
-        for f in WINDOW:
-            ax_m.axhline(f, color="0.6", linestyle=":", linewidth=1)
-        ax_m.set_ylabel("discharged mass / inventory")
-        ax_m.set_title("discharged mass (dashed: linear fit, 20–70 % window)", fontsize=10)
-        ax_m.set_ylim(0.0, 1.0)
-    ax_m.set_xlabel("time after opening (s)")
-    ax_m.set_xlim(left=0.0)
-    ax_m.legend(fontsize=8, loc="upper left" if head else "lower right")
-    ax_m.grid(True, alpha=0.3)
+        _plot_drained_mass(ax_m, r, colors)
 
     d0s = np.asarray(r.orifices)
     w = np.asarray(r.rate_mean)
@@ -1219,6 +1237,72 @@ def _plot(path: Path, r: StudyResult) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+def _plot_rate_history(ax: Any, r: StudyResult, colors: list[str]) -> None:
+    """Constant head: the rate in 0.05 s bins over the measured W, per orifice (steady = 1)."""
+    case, d, width = r.case, r.case.diameter, 0.05
+    for i, d0 in enumerate(r.orifices):
+        for j, run in enumerate(x for x in r.runs if x.orifice == d0):
+            if not (math.isfinite(run.rate) and run.rate > 0 and len(run.time) > 1):
+                continue
+            edges = np.arange(0.0, run.time[-1] + 1e-12, width)
+            mass = np.interp(edges, run.time, run.mass)
+            label = f"D0 = {d0 * 1e3:g} mm ({d0 / d:.3g} d)" if j == 0 else None
+            ax.stairs(
+                np.diff(mass) / width / run.rate,
+                edges,
+                baseline=None,
+                color=colors[i % len(colors)],
+                linewidth=1.1,
+                label=label,
+            )
+    t0 = case.transient
+    t1 = max(case.measure_window(d0)[1] for d0 in r.orifices)
+    ax.axvspan(t0, t1, color="0.9", zorder=0, label="steady window (from)")
+    ax.axhline(1.0, color="k", linewidth=0.8)
+    _style_history(
+        ax,
+        "rate in 0.05 s bins / W",
+        "discharge rate over the measured W (window starts at the grey band)",
+        1.6,
+    )
+
+
+def _style_history(ax: Any, ylabel: str, title: str, top: float) -> None:
+    ax.set_xlabel("time after opening (s)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(0.0, top)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.grid(True, alpha=0.3)
+
+
+def _plot_drained_mass(ax: Any, r: StudyResult, colors: list[str]) -> None:
+    """Draining silo: discharged fraction of the inventory, with the 20-70 % fit."""
+    d = r.case.diameter
+    for i, d0 in enumerate(r.orifices):
+        color = colors[i % len(colors)]
+        for j, run in enumerate(x for x in r.runs if x.orifice == d0):
+            label = f"D0 = {d0 * 1e3:g} mm ({d0 / d:.3g} d)" if j == 0 else None
+            frac = run.mass / run.inventory
+            ax.plot(run.time, frac, color=color, linewidth=1.2, label=label)
+            sel = (run.mass >= WINDOW[0] * run.inventory) & (run.mass <= WINDOW[1] * run.inventory)
+            if math.isfinite(run.rate) and np.count_nonzero(sel) >= 3:
+                t = run.time[sel]
+                p = np.polyfit(t, frac[sel], 1)
+                ax.plot(t, np.polyval(p, t), "--", color="k", linewidth=0.8)
+            if run.clogged:
+                ax.plot(run.time[-1], frac[-1], "x", color=color, markersize=8)
+    for f in WINDOW:
+        ax.axhline(f, color="0.6", linestyle=":", linewidth=1)
+    _style_history(
+        ax,
+        "discharged mass / inventory",
+        "discharged mass (dashed: linear fit, 20–70 % window)",
+        1.0,
+    )
 
 
 def _report(r: StudyResult) -> str:
@@ -1319,6 +1403,13 @@ def _report(r: StudyResult) -> str:
         )
     if r.fit is None:
         lines.append("- not enough orifices with a measured rate for a fit")
+    if r.exponent_range is not None:
+        lo, hi = r.exponent_range
+        lines.append(
+            f"- one-standard-error range of the free n: {lo:.2f}–{hi:.2f} (profile over n "
+            f"with C, k refitted; scatter of one run's W between seeds {r.scatter:.1%}, "
+            f"{r.scatter / math.sqrt(len(r.seeds)):.1%} for the mean of {len(r.seeds)} seeds)"
+        )
     verdict = acceptance(r)
     lines.append(
         "- CASES D1 check (i): free-fit n = 2.5 ± 0.15, and with n = 2.5: C ∈ [0.5, 0.7], "
@@ -1438,7 +1529,16 @@ def build_parser() -> argparse.ArgumentParser:
         f"{SiloCase.measure_time:g} s)",
     )
     parser.add_argument(
-        "--seeds", type=int, default=1, help="number of seeds per orifice (default 1)"
+        "--seeds",
+        type=int,
+        default=None,
+        help="number of seeds per orifice (default 2; 1 with --quick)",
+    )
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=1,
+        help="seeds are first-seed, first-seed + 1, ... (default 1; to add seeds to a study)",
     )
     parser.add_argument(
         "--jobs", type=int, default=None, help="worker processes (default: number of CPUs)"
@@ -1488,7 +1588,7 @@ def case_from_args(args: argparse.Namespace) -> tuple[SiloCase, list[float]]:
     if args.vtk_every is not None:
         base["vtk_every"] = args.vtk_every
     orifices = args.orifices or (QUICK_ORIFICES_MM if args.quick else DEFAULT_ORIFICES_MM)
-    if args.seeds < 1:
+    if args.seeds is not None and args.seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
     return SiloCase(**base), [v * 1e-3 for v in orifices]
 
@@ -1501,7 +1601,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             reanalyse(args.output)
             return 0
         case, orifices = case_from_args(args)
-        run_study(args.output, case, orifices, seeds=range(1, args.seeds + 1), jobs=args.jobs)
+        count = args.seeds if args.seeds is not None else (1 if args.quick else 2)
+        seeds = range(args.first_seed, args.first_seed + count)
+        run_study(args.output, case, orifices, seeds=seeds, jobs=args.jobs)
     except ValueError as err:
         parser.error(str(err))
     return 0
