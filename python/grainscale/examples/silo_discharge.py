@@ -1445,8 +1445,14 @@ def _report(r: StudyResult) -> str:
         "of a draining inventory: about 1e12 particle-steps, days on one core. This study keeps "
         "the material of D1 (d, PSD, ρ_p, ν, e, μ, μ_r, η_r) and reduces the cost by a softer "
         "modulus (E = 1e7 Pa; at D0 = 24 mm W = 0.0929 kg/s against 0.0924 kg/s at 1e8 Pa), "
-        "Δt = 0.2 t_R, a constant head (a shallow bed that flows steadily instead of a tall one "
-        "that drains), silos only as wide as the wall distance requires and one seed.",
+        "Δt = 0.2 t_R, "
+        + (
+            "a constant head (a shallow bed that flows steadily instead of a tall one that "
+            "drains), "
+            if case.constant_head
+            else ""
+        )
+        + f"silos only as wide as the wall distance requires and {len(r.seeds)} seed(s).",
         "",
         f"Files: {r.plot.name} (plot), results.json (every number), history_D<mm>_s<seed>.csv "
         "(outlet histories: time after opening, discharged mass and count).",
