@@ -1,6 +1,7 @@
 #include "neighbor/neighbor_list.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace grainscale {
 
@@ -12,31 +13,68 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, C
   Real r_max = 0;
   for (Index i = 0; i < ps.n_local(); ++i) r_max = std::max(r_max, r[i]);
   const auto R = grid.reach(2 * r_max + skin);
-  list.first.resize(n + 1);
-  list.partner.clear();
-  for (Index i = 0; i < n; ++i) {
-    list.first[i] = static_cast<Index>(list.partner.size());
-    const auto c = grid.coords(grid.cell_of[i]);
-    const Vec3 xi = x[i];
-    const Real ri = r[i];
-    const GlobalId idi = id[i];
-    // Cells adjacent along x are adjacent in `grid.particles`, so each (dy, dz) row of the
-    // stencil is one contiguous range of candidates.
-    const int x0 = std::max(c[0] - R[0], 0), x1 = std::min(c[0] + R[0], grid.dims[0] - 1);
-    for (int cz = std::max(c[2] - R[2], 0); cz <= std::min(c[2] + R[2], grid.dims[2] - 1); ++cz) {
-      for (int cy = std::max(c[1] - R[1], 0); cy <= std::min(c[1] + R[1], grid.dims[1] - 1); ++cy) {
-        const Index begin = grid.cell_start[grid.cell_id(x0, cy, cz)];
-        const Index end = grid.cell_start[grid.cell_id(x1, cy, cz) + 1];
-        for (Index k = begin; k < end; ++k) {
-          const Index j = grid.particles[k];
-          if (id[j] <= idi) continue;
-          const Real cut = ri + r[j] + skin;
-          if ((xi - x[j]).squaredNorm() < cut * cut) list.partner.push_back(j);
+
+  // Every unordered pair of cells is visited once: for the particle in grid slot p, the later
+  // slots of its own cell and the cells "after" it (higher z, or same z and higher y, or same z
+  // and y and higher x) within the reach. Cells adjacent along x are adjacent in
+  // `grid.particles`, so each (dy, dz) row of the stencil is one contiguous range of slots.
+  // A pair found is stored at the particle with the smaller global id when that one is owned;
+  // when it is a ghost the same pair is found again between its owner and an image of the
+  // other particle (which is then stored), so it is skipped here.
+  std::vector<std::pair<Index, Index>>& found = list.scratch_pairs;
+  found.clear();
+  std::vector<Index>& count = list.scratch_count;
+  count.assign(n + 1, 0);
+  const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+  for (int cz = 0; cz < nz; ++cz)
+    for (int cy = 0; cy < ny; ++cy)
+      for (int cx = 0; cx < nx; ++cx) {
+        const int cell = grid.cell_id(cx, cy, cz);
+        const int x0 = std::max(cx - R[0], 0), x1 = std::min(cx + R[0], nx - 1);
+        for (Index p = grid.cell_start[cell]; p < grid.cell_start[cell + 1]; ++p) {
+          const Index a = grid.particles[p];
+          const Vec3 xa = x[a];
+          const Real ra = r[a] + skin;
+          const GlobalId ida = id[a];
+          auto scan = [&](Index begin, Index end) {
+            for (Index q = begin; q < end; ++q) {
+              const Index b = grid.particles[q];
+              const Real cut = ra + r[b];
+              if ((xa - x[b]).squaredNorm() >= cut * cut) continue;
+              const bool a_first = ida < id[b];
+              const Index owner = a_first ? a : b, partner = a_first ? b : a;
+              if (owner >= n) continue;  // a ghost: stored through its owner
+              found.emplace_back(owner, partner);
+              ++count[owner];
+            }
+          };
+          // Own row: later slots of this cell and the cells after it along x.
+          scan(p + 1, grid.cell_start[grid.cell_id(x1, cy, cz) + 1]);
+          for (int dz = 0; dz <= R[2]; ++dz) {
+            const int z = cz + dz;
+            if (z >= nz) break;
+            for (int dy = dz == 0 ? 1 : -R[1]; dy <= R[1]; ++dy) {
+              const int y = cy + dy;
+              if (y < 0) continue;
+              if (y >= ny) break;
+              scan(grid.cell_start[grid.cell_id(x0, y, z)],
+                   grid.cell_start[grid.cell_id(x1, y, z) + 1]);
+            }
+          }
         }
       }
-    }
+
+  // Compressed rows by owner, entries in the order found.
+  list.first.resize(n + 1);
+  Index offset = 0;
+  for (Index i = 0; i < n; ++i) {
+    list.first[i] = offset;
+    offset += count[i];
+    count[i] = list.first[i];  // becomes the fill position
   }
-  list.first[n] = static_cast<Index>(list.partner.size());
+  list.first[n] = offset;
+  list.partner.resize(offset);
+  for (const auto& [owner, partner] : found) list.partner[count[owner]++] = partner;
   list.history.assign(list.partner.size() * list.history_stride, 0.0);
   list.touching.assign(list.partner.size(), 0);
 }

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/types.hpp"
@@ -26,6 +27,9 @@ struct ContactList {
   // history of the many non-touching entries instead of clearing it every step.
   std::vector<std::uint8_t> touching;
   int history_stride = 0;
+  // Build scratch kept between rebuilds (fresh large buffers cost page faults each time).
+  std::vector<std::pair<Index, Index>> scratch_pairs;
+  std::vector<Index> scratch_count;
 
   std::size_t size() const { return partner.size(); }
 };
