@@ -4,6 +4,28 @@
 
 namespace grainscale {
 
+namespace {
+
+// One half kick of particle i; in 2-D the frozen components are written as zero rather than
+// skipped, so a value set from Python cannot leak into the kinetic energy or the drift.
+template <bool kPlanar>
+inline void half_kick(Vec3& v, Vec3& w, const Vec3& f, const Vec3& t, Real hm, Real hi) {
+  if constexpr (kPlanar) {
+    v[0] += hm * f[0];
+    v[1] += hm * f[1];
+    v[2] = 0;
+    w[0] = 0;
+    w[1] = 0;
+    w[2] += hi * t[2];
+  } else {
+    v += hm * f;
+    w += hi * t;
+  }
+}
+
+}  // namespace
+
+template <bool kPlanar>
 Real kick_drift(ParticleStore& ps, Real dt, const std::vector<Vec3>& reference) {
   const Real half = 0.5 * dt;
   const Index n = ps.n_owned();
@@ -16,15 +38,15 @@ Real kick_drift(ParticleStore& ps, Real dt, const std::vector<Vec3>& reference) 
   const Real* ii = ps.inv_inertia.data();
   Real max_d2 = 0;
   for (Index i = 0; i < n; ++i) {
-    v[i] += (half * im[i]) * f[i];
-    w[i] += (half * ii[i]) * t[i];
-    x[i] += dt * v[i];
+    half_kick<kPlanar>(v[i], w[i], f[i], t[i], half * im[i], half * ii[i]);
+    x[i] += dt * v[i];  // v_z is exactly 0 in 2-D, so z is unchanged bit for bit
     const Real d2 = (x[i] - reference[i]).squaredNorm();
     if (d2 > max_d2 || d2 != d2) max_d2 = d2;  // a NaN sticks, so it forces a (checked) rebuild
   }
   return max_d2;
 }
 
+template <bool kPlanar>
 void kick(ParticleStore& ps, Real dt) {
   const Real half = 0.5 * dt;
   const Index n = ps.n_owned();
@@ -34,10 +56,13 @@ void kick(ParticleStore& ps, Real dt) {
   const Vec3* t = ps.torque.data();
   const Real* im = ps.inv_mass.data();
   const Real* ii = ps.inv_inertia.data();
-  for (Index i = 0; i < n; ++i) {
-    v[i] += (half * im[i]) * f[i];
-    w[i] += (half * ii[i]) * t[i];
-  }
+  for (Index i = 0; i < n; ++i)
+    half_kick<kPlanar>(v[i], w[i], f[i], t[i], half * im[i], half * ii[i]);
 }
+
+template Real kick_drift<false>(ParticleStore&, Real, const std::vector<Vec3>&);
+template Real kick_drift<true>(ParticleStore&, Real, const std::vector<Vec3>&);
+template void kick<false>(ParticleStore&, Real);
+template void kick<true>(ParticleStore&, Real);
 
 }  // namespace grainscale
