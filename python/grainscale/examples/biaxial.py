@@ -37,26 +37,40 @@ from .biaxial_run import BiaxialCase, run_sample
 PAPER_ERROR = {2.0: 0.02, 4.0: 0.03}  # Zhang et al. 2021, Fig. 5 (20 samples)
 
 
-def _task(args: tuple[dict[str, Any], float, int]) -> dict[str, Any]:
-    case, h, seed = args
+def _task(args: tuple[dict[str, Any], float, int, str]) -> dict[str, Any]:
+    """One run, cached in runs/h<h>_s<seed>.json of the output (a rerun resumes); a specimen
+    that does not consolidate is recorded as failed, not dropped silently."""
+    case, h, seed, out = args
+    cache = Path(out) / "runs" / f"h{h:g}_s{seed}.json"
+    if cache.exists():
+        saved = json.loads(cache.read_text())
+        if saved.get("case") == case:
+            return saved
     t0 = time.perf_counter()
-    result = run_sample(BiaxialCase(**case), h, seed)
+    try:
+        result = run_sample(BiaxialCase(**case), h, seed)
+    except RuntimeError as error:
+        result = {"h": h, "seed": seed, "case": case, "failed": str(error)}
     result["seconds"] = time.perf_counter() - t0
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    cache.write_text(json.dumps(result))
     return result
 
 
-def run_study(case: BiaxialCase, scales: Sequence[float], samples: int, jobs: int) -> list[dict]:
+def run_study(
+    case: BiaxialCase, scales: Sequence[float], samples: int, jobs: int, out: Path
+) -> list[dict]:
     """Every (h, seed) run, the most expensive (h = 1) first so workers finish together."""
-    tasks = [
-        (dataclasses.asdict(case), h, s) for h in sorted(scales) for s in range(1, samples + 1)
-    ]
+    c = dataclasses.asdict(case)
+    tasks = [(c, h, s, str(out)) for h in sorted(scales) for s in range(1, samples + 1)]
     runs: list[dict] = []
 
     def done(result: dict) -> None:
         runs.append(result)
+        what = result.get("failed") or f"{result['particles']} discs"
         print(
-            f"[{len(runs)}/{len(tasks)}] h={result['h']:g} seed={result['seed']}: "
-            f"{result['particles']} discs, {result['seconds']:.0f} s",
+            f"[{len(runs)}/{len(tasks)}] h={result['h']:g} seed={result['seed']}: {what}, "
+            f"{result['seconds']:.0f} s",
             flush=True,
         )
 
@@ -81,6 +95,8 @@ def slope(strain: np.ndarray, value: np.ndarray, upto: float) -> float:
 
 def analyse(runs: list[dict], fit_strain: float) -> dict[str, Any]:
     """Per-run gradients and per-h statistics against the theoretical scaling G_1 h."""
+    failed = [f"h={r['h']:g} seed={r['seed']}: {r['failed']}" for r in runs if "failed" in r]
+    runs = [r for r in runs if "failed" not in r]
     for r in runs:
         e = np.asarray(r["strain"])
         r["force_gradient"] = slope(e, np.asarray(r["mean_force"]), fit_strain)
@@ -128,7 +144,7 @@ def analyse(runs: list[dict], fit_strain: float) -> dict[str, Any]:
                 "seconds": float(values(h, "seconds").sum()),
             }
         )
-    return {"fit_strain": fit_strain, "table": table}
+    return {"fit_strain": fit_strain, "table": table, "failed": failed}
 
 
 def plot(runs: list[dict], summary: dict[str, Any], path: Path) -> None:
@@ -218,6 +234,8 @@ def report(case: BiaxialCase, summary: dict[str, Any], command: str, wall: float
             f"{r['peak_deviator_ratio']:.3f} | {r['initial_force_ratio']:.3f} | "
             f"{100 * r['lateral_error_max']:.2f} | {r['seconds']:.0f} |"
         )
+    lines += ["", f"Specimens that did not consolidate (left out): {len(summary['failed'])}"]
+    lines += [f"- {f}" for f in summary["failed"]]
     lines += [
         "",
         "![biaxial](biaxial.png)",
@@ -235,7 +253,8 @@ def report(case: BiaxialCase, summary: dict[str, Any], command: str, wall: float
         "- The contact law is the 3-D one on discs 1 m thick, so for Hertz the 2-D cg rule needs",
         "  E x 1/h (force ~ E R^(1/2) delta^(3/2) must scale as h); for the linear law k_n is",
         "  invariant, as for a 2-D code per unit thickness (PFC2D).",
-        "- Raw curves and per-run numbers: results.json (not committed; rerun the command).",
+        "- Raw curves and per-run numbers: results.json and runs/ (not committed; rerun the",
+        "  command: cached runs are reused).",
         "",
     ]
     return "\n".join(lines)
@@ -270,9 +289,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         case, command = BiaxialCase(**saved["case"]), saved["command"]
     else:
         t0 = time.perf_counter()
-        runs = run_study(case, args.scales, args.samples, args.jobs)
+        runs = run_study(case, args.scales, args.samples, args.jobs, out)
         wall = time.perf_counter() - t0
     summary = analyse(runs, args.fit_strain)
+    runs = [r for r in runs if "failed" not in r]
     (out / "results.json").write_text(
         json.dumps(
             {
