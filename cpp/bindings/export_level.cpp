@@ -89,6 +89,9 @@ void export_level(py::module_& m) {
       .def("set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); })
       .def("set_time_step", &Level::set_time_step, py::arg("time_step"), py::arg("force"))
       .def("set_skin", &Level::set_skin)
+      .def("set_dimension", &Level::set_dimension, py::arg("dimension"))
+      .def_property_readonly("dimension", &Level::dimension)
+      .def_property_readonly("plane_z", &Level::plane_z)
       .def(
           "add_particles",
           [](Level& l, const Array3& position, const py::object& velocity,

@@ -29,6 +29,10 @@ struct PackSpec {
   Vec3 velocity = Vec3::Zero();
   std::uint64_t seed = 0;
   int max_attempts = 1000;  // directed trials per particle once the region is nearly full
+  // 2-D mode: centres in the plane z = plane_z, discs (volume_fraction is an area fraction of
+  // the region's x-y cross-section); the region must then be an axis-aligned box.
+  bool planar = false;
+  Real plane_z = 0;
 };
 
 struct Placement {

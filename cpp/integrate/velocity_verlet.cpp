@@ -4,7 +4,28 @@
 
 namespace grainscale {
 
-template <bool kClosingKick>
+namespace {
+
+// One half kick of particle i; in 2-D the frozen components are written as zero rather than
+// skipped, so a value set from Python cannot leak into the kinetic energy or the drift.
+template <bool kPlanar>
+inline void half_kick(Vec3& v, Vec3& w, const Vec3& f, const Vec3& t, Real hm, Real hi) {
+  if constexpr (kPlanar) {
+    v[0] += hm * f[0];
+    v[1] += hm * f[1];
+    v[2] = 0;
+    w[0] = 0;
+    w[1] = 0;
+    w[2] += hi * t[2];
+  } else {
+    v += hm * f;
+    w += hi * t;
+  }
+}
+
+}  // namespace
+
+template <bool kPlanar, bool kClosingKick>
 Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
                 const std::vector<Vec3>& reference) {
   const Real half = 0.5 * dt;
@@ -19,15 +40,10 @@ Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
   const Real* ii = ps.inv_inertia.data();
   Real max_d2 = 0;
   for (Index i = 0; i < n; ++i) {
-    const Vec3 dv = (half * im[i]) * f[i];
-    const Vec3 dw = (half * ii[i]) * t[i];
-    if constexpr (kClosingKick) {
-      v[i] += dv;
-      w[i] += dw;
-    }
-    v[i] += dv;
-    w[i] += dw;
-    x[i] += dt * v[i];
+    const Real hm = half * im[i], hi = half * ii[i];
+    if constexpr (kClosingKick) half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
+    half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
+    x[i] += dt * v[i];  // v_z is exactly 0 in 2-D, so z is unchanged bit for bit
     f[i] = m[i] * gravity;
     t[i].setZero();
     const Real d2 = (x[i] - reference[i]).squaredNorm();
@@ -36,9 +52,7 @@ Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
   return max_d2;
 }
 
-template Real kick_drift<false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-template Real kick_drift<true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-
+template <bool kPlanar>
 void kick(ParticleStore& ps, Real dt) {
   const Real half = 0.5 * dt;
   const Index n = ps.n_owned();
@@ -48,10 +62,15 @@ void kick(ParticleStore& ps, Real dt) {
   const Vec3* t = ps.torque.data();
   const Real* im = ps.inv_mass.data();
   const Real* ii = ps.inv_inertia.data();
-  for (Index i = 0; i < n; ++i) {
-    v[i] += (half * im[i]) * f[i];
-    w[i] += (half * ii[i]) * t[i];
-  }
+  for (Index i = 0; i < n; ++i)
+    half_kick<kPlanar>(v[i], w[i], f[i], t[i], half * im[i], half * ii[i]);
 }
+
+template Real kick_drift<false, false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
+template Real kick_drift<false, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
+template Real kick_drift<true, false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
+template Real kick_drift<true, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
+template void kick<false>(ParticleStore&, Real);
+template void kick<true>(ParticleStore&, Real);
 
 }  // namespace grainscale

@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "integrate/time_step.hpp"
 #include "integrate/velocity_verlet.hpp"
+#include "state/body_shape.hpp"
 
 namespace grainscale {
 
@@ -111,6 +112,13 @@ void Level::set_time_step(Real dt, bool force) {
   force_dt_ = force;
 }
 
+void Level::set_dimension(int dimension) {
+  if (dimension != 2 && dimension != 3) throw_invalid("Simulation.dimension", "2 or 3", dimension);
+  if (ps_.n_owned() > 0 || !streams_.empty())
+    throw_invalid("Simulation.dimension", "set before particles or streams are added", dimension);
+  dimension_ = dimension;
+}
+
 void Level::set_skin(Real skin) {
   if (!(skin > 0) || !std::isfinite(skin))
     throw_invalid("Simulation.skin", "positive and finite (m)", skin);
@@ -139,6 +147,12 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
               << "xyz"[a] << " (particle " << k << ")";
         throw_invalid("add_particles.position", range.str(), x[a]);
       }
+    if (dimension_ == 2 && x[2] != plane_z()) {
+      std::ostringstream c;
+      c << "equal to the plane z = " << shortest(plane_z()) << " m of the 2-D mode (particle " << k
+        << ")";
+      throw_invalid("add_particles.position z", c.str(), x[2]);
+    }
     if (!(radius[k] > 0) || !std::isfinite(radius[k]))
       throw_invalid("add_particles.radius", "positive and finite (m)", radius[k]);
     if (material[k] < 0 || material[k] >= materials_.n_materials())
@@ -159,14 +173,18 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
   const GlobalId first = next_id_;
   for (Index k = 0; k < n; ++k) {
     const Real r = radius[k];
-    const Real m = materials_[material[k]].density * (4.0 / 3.0) * M_PI * r * r * r;
+    const Real m = particle_mass(materials_[material[k]].density, r, dimension_);
     const Vec3 x(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
-    const Vec3 v =
+    Vec3 v =
         velocity ? Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]) : Vec3::Zero();
-    const Vec3 w = angular_velocity ? Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
-                                           angular_velocity[3 * k + 2])
-                                    : Vec3::Zero();
-    ps_.add_owned(next_id_++, x, v, w, r, m, 0.4 * m * r * r, material[k]);
+    Vec3 w = angular_velocity ? Vec3(angular_velocity[3 * k], angular_velocity[3 * k + 1],
+                                     angular_velocity[3 * k + 2])
+                              : Vec3::Zero();
+    if (dimension_ == 2) {  // a disc moves in its plane and spins about z only
+      v[2] = 0;
+      w[0] = w[1] = 0;
+    }
+    ps_.add_owned(next_id_++, x, v, w, r, m, particle_inertia(m, r, dimension_), material[k]);
     origin_.push_back(-1);
   }
   return first;
@@ -443,7 +461,7 @@ void Level::compute_forces(const Law& law) {
                                                stats_);
 }
 
-template <class Law>
+template <bool kPlanar, class Law>
 void Level::run_with(const Law& law, std::int64_t steps) {
   if (!lists_valid_) rebuild();
   if (!forces_valid_) compute_forces<Law, false, true, false>(law);
@@ -452,8 +470,8 @@ void Level::run_with(const Law& law, std::int64_t steps) {
   for (std::int64_t s = 0; s < steps; ++s) {
     // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
     // which also resets the owned forces to m g.
-    const Real max_d2 = s == 0 ? kick_drift<false>(ps_, dt_, gravity_, x_at_build_)
-                               : kick_drift<true>(ps_, dt_, gravity_, x_at_build_);
+    const Real max_d2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_, x_at_build_)
+                               : kick_drift<kPlanar, true>(ps_, dt_, gravity_, x_at_build_);
     Real wall_shift = 0;
     for (std::size_t k = 0; k < walls_.size(); ++k) {
       wall_shift_[k] += walls_[k].advance(dt_, wall_reach_[k]);
@@ -475,13 +493,20 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     else
       compute_forces<Law, true, false, false>(law);
   }
-  if (steps > 0) kick(ps_, dt_);
+  if (steps > 0) kick<kPlanar>(ps_, dt_);
 }
 
 void Level::run(std::int64_t steps) {
   if (steps < 0) throw_invalid("Simulation.run.steps", "non-negative", steps);
   prepare();
-  std::visit([&](const auto& law) { run_with(law, steps); }, law_);
+  std::visit(
+      [&](const auto& law) {
+        if (dimension_ == 2)
+          run_with<true>(law, steps);
+        else
+          run_with<false>(law, steps);
+      },
+      law_);
 }
 
 }  // namespace grainscale

@@ -48,6 +48,11 @@ class Level {
   void set_skin(Real skin);
   Real skin() const { return skin_; }
   const Domain& domain() const { return domain_; }
+  // 2 (discs in the plane z = plane_z(), the domain's mid-height) or 3 (spheres); set before
+  // any particle exists (DESIGN.md 2.1, 2.2; integrate/velocity_verlet.hpp for what is frozen).
+  void set_dimension(int dimension);
+  int dimension() const { return dimension_; }
+  Real plane_z() const { return 0.5 * (domain_.lo[2] + domain_.hi[2]); }
 
   // Adds n particles (arrays of 3n / n values; velocity and angular velocity may be null).
   // Returns the global id of the first one; the others follow consecutively.
@@ -113,7 +118,7 @@ class Level {
   // --- end insertion and outlets ---
 
  private:
-  template <class Law>
+  template <bool kPlanar, class Law>
   void run_with(const Law& law, std::int64_t steps);
   // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
   template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
@@ -138,6 +143,7 @@ class Level {
   Real dt_ = 0;
   bool force_dt_ = false;
   Real skin_ = 0;
+  int dimension_ = 3;
 
   ParticleStore ps_;
   std::vector<Wall> walls_;
@@ -172,6 +178,8 @@ class Level {
 
   // --- insertion and outlets (level/level_insert.cpp) ---
   void apply_outlets();
+  // The pack spec of the 2-D mode: discs in the plane, inside the region's x-y rectangle.
+  PackSpec planar_pack_spec(const PackSpec& spec) const;
   void run_streams();
   std::vector<StreamInserter> streams_;
   std::vector<Outlet> outlets_;

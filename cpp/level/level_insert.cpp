@@ -55,29 +55,51 @@ std::pair<GlobalId, Index> Level::pack(const PackSpec& spec) {
     throw_invalid("Pack.velocity", "finite (m/s)", spec.velocity.transpose());
   if (spec.max_attempts < 1) throw_invalid("Pack.max_attempts", "at least 1", spec.max_attempts);
   require_inside(spec.region, domain_, "Pack.region");
+  const PackSpec s = dimension_ == 2 ? planar_pack_spec(spec) : spec;
 
-  Rng rng(spec.seed);
-  const std::vector<Real> radii = pack_radii(spec, rng);
+  Rng rng(s.seed);
+  const std::vector<Real> radii = pack_radii(s, rng);
   if (radii.empty()) return {next_id_, 0};
   Vec3 lo, hi;
-  spec.region.bounds(lo, hi);
+  s.region.bounds(lo, hi);
   OccupancyGrid grid(lo, hi, radii.front(), ps_, domain_);
   const WallClearance walls(walls_, lo, hi, radii.front());
-  const Placement p = place_in_region(spec, radii, grid, walls, rng);
+  const Placement p = place_in_region(s, radii, grid, walls, rng);
 
   const Index n = static_cast<Index>(p.radius.size());
   std::vector<Real> x(3 * n), v(3 * n);
   for (Index k = 0; k < n; ++k)
     for (int a = 0; a < 3; ++a) {
       x[3 * k + a] = p.position[k][a];
-      v[3 * k + a] = spec.velocity[a];
+      v[3 * k + a] = s.velocity[a];
     }
-  const std::vector<std::int32_t> mat(n, spec.material);
+  const std::vector<std::int32_t> mat(n, s.material);
   const GlobalId first = add_particles(n, x.data(), v.data(), nullptr, p.radius.data(), mat.data());
   return {first, n};
 }
 
+PackSpec Level::planar_pack_spec(const PackSpec& spec) const {
+  Vec3 lo, hi;
+  spec.region.bounds(lo, hi);
+  const Real z = plane_z();
+  if (!(lo[2] <= z && z <= hi[2])) {
+    std::ostringstream c;
+    c << "to contain the plane z = " << shortest(z) << " m of the 2-D mode";
+    throw_invalid("Pack.region z range", c.str(),
+                  "[" + shortest(lo[2]) + ", " + shortest(hi[2]) + "]");
+  }
+  // The x-y rectangle of the region, as a slab thick enough in z for every disc.
+  PackSpec s = spec;
+  const Real half = spec.radius.max_radius();
+  s.region = Region::box(Vec3(lo[0], lo[1], z - half), Vec3(hi[0], hi[1], z + half));
+  s.planar = true;
+  s.plane_z = z;
+  return s;
+}
+
 int Level::add_stream(const StreamSpec& spec) {
+  if (dimension_ == 2)
+    throw_invalid("Simulation.insert(Stream)", "used in 3-D only (dimension=3)", "dimension=2");
   if (spec.material < 0 || spec.material >= materials_.n_materials())
     throw_invalid("Stream.material", "a material known to the simulation", spec.material);
   StreamInserter s(spec, materials_[spec.material].density);

@@ -71,6 +71,8 @@ std::string Level::signature() const {
     << ";walls=" << walls_.size() << ";primitives=" << primitives_.wall.size()
     << ";streams=" << streams_.size() << ";outlets=" << outlets_.size()
     << ";periodic=" << domain_.periodic[0] << domain_.periodic[1] << domain_.periodic[2];
+  // Only the 2-D mode is named, so 3-D checkpoints written before it existed still load.
+  if (dimension_ != 3) s << ";dimension=" << dimension_;
   return s.str();
 }
 

@@ -66,6 +66,7 @@ def lattice(
     count: int | None = None,
     jitter: float = 0.0,
     seed: int = 0,
+    plane_z: float | None = None,
 ) -> np.ndarray:
     """Simple-cubic lattice sites inside ``region``, filled bottom-up (z, then y, then x).
 
@@ -75,6 +76,8 @@ def lattice(
         count: number of sites (None: all that fit).
         jitter: uniform random displacement in [-jitter, jitter] added to x and y (m).
         seed: random seed for the jitter.
+        plane_z: 2-D mode (``sim.plane_z``): a square lattice in the region's x-y rectangle,
+            filled by rows (y, then x), with every z equal to ``plane_z``.
 
     Returns:
         (count, 3) positions.
@@ -84,6 +87,9 @@ def lattice(
     if not 0 <= jitter < 0.5 * spacing:
         raise ValueError(f"lattice.jitter must be in [0, spacing/2), got {jitter!r}")
     n = np.floor(region.length / spacing + 1e-9).astype(int)
+    if plane_z is not None:
+        _check_plane("lattice", region, plane_z)
+        n[2] = 1
     capacity = int(np.prod(n))
     if count is None:
         count = capacity
@@ -99,7 +105,17 @@ def lattice(
     if jitter > 0:
         rng = np.random.default_rng(seed)
         pos[:, :2] += rng.uniform(-jitter, jitter, size=(count, 2))
+    if plane_z is not None:
+        pos[:, 2] = plane_z
     return pos
+
+
+def _check_plane(owner: str, region: Box, plane_z: float) -> None:
+    if not region.lo[2] <= plane_z <= region.hi[2]:
+        raise ValueError(
+            f"{owner}.plane_z must lie in the region's z range [{region.lo[2]}, "
+            f"{region.hi[2]}], got {plane_z!r}"
+        )
 
 
 def random_in_box(
@@ -108,6 +124,7 @@ def random_in_box(
     count: int | None = None,
     seed: int = 0,
     max_attempts: int = 200,
+    plane_z: float | None = None,
 ) -> np.ndarray:
     """Random non-overlapping sphere centres inside ``region`` (spheres fully inside).
 
@@ -117,6 +134,8 @@ def random_in_box(
         count: number of particles when ``radius`` is a scalar.
         seed: random seed.
         max_attempts: trials per particle before giving up.
+        plane_z: 2-D mode (``sim.plane_z``): discs inside the region's x-y rectangle, centres
+            at z = ``plane_z``.
 
     Returns:
         (N, 3) positions, in the order of ``radius``.
@@ -133,15 +152,21 @@ def random_in_box(
     rng = np.random.default_rng(seed)
     lo = np.asarray(region.lo, dtype=float)
     hi = np.asarray(region.hi, dtype=float)
+    axes = 3
+    if plane_z is not None:
+        _check_plane("random_in_box", region, plane_z)
+        axes = 2
     cell = 2.0 * float(radii.max())
     grid: dict[tuple[int, int, int], list[int]] = {}
     pos = np.empty((radii.size, 3))
     for i in np.argsort(-radii, kind="stable"):
         r = radii[i]
-        if np.any(hi - lo <= 2 * r):
+        if np.any((hi - lo)[:axes] <= 2 * r):
             raise ValueError(f"random_in_box: region too small for radius {r}")
         for _ in range(max_attempts):
             p = rng.uniform(lo + r, hi - r)
+            if plane_z is not None:
+                p[2] = plane_z
             c = tuple(np.floor(p / cell).astype(int))
             ok = True
             for dx in (-1, 0, 1):
@@ -162,10 +187,15 @@ def random_in_box(
                 grid.setdefault(c, []).append(int(i))
                 break
         else:
+            fraction = (
+                np.sum(math.pi * radii**2) / (region.length[0] * region.length[1])
+                if plane_z is not None
+                else np.sum(4 / 3 * math.pi * radii**3) / region.volume
+            )
             raise RuntimeError(
                 f"random_in_box could not place particle {i} (radius {r}) after "
-                f"{max_attempts} attempts; region too full (volume fraction "
-                f"{np.sum(4 / 3 * math.pi * radii**3) / region.volume:.3f})"
+                f"{max_attempts} attempts; region too full (requested "
+                f"{'area' if plane_z is not None else 'volume'} fraction {fraction:.3f})"
             )
     return pos
 
@@ -290,12 +320,13 @@ class Pack:
 
     Args:
         region: ``gs.Box``, a finite ``gs.geometry.Cylinder`` or a closed
-            ``gs.geometry.Mesh``, inside the domain.
+            ``gs.geometry.Mesh``, inside the domain. In 2-D mode a ``gs.Box`` whose z range
+            contains ``sim.plane_z``: discs are placed in its x-y rectangle, in the plane.
         radius: a ``gs.dist`` distribution, or one radius (m).
         material: the particles' material.
         count: number of particles.
-        volume_fraction: particle volume / region volume in [0, 1]; radii are drawn until the
-            total volume is closest to the target.
+        volume_fraction: particle volume / region volume in [0, 1] (2-D: disc area / rectangle
+            area); radii are drawn until the total is closest to the target.
         velocity: initial velocity of every particle (m/s).
         seed: random seed (radii and positions).
         max_attempts: trial positions per particle.
@@ -347,6 +378,8 @@ class Pack:
         )
 
     def _insert(self, sim: Simulation) -> np.ndarray:
+        if sim.dimension == 2 and not isinstance(self.region, Box):
+            raise ValueError(f"Pack.region must be a gs.Box in 2-D mode, got {self.region!r}")
         first, n = sim._level.pack(
             _core_region(self.region, "Pack", allow_mesh=True),
             cast(Distribution, self.radius)._to_core(),

@@ -100,6 +100,12 @@ class Simulation:
         quiet: do not print thermo lines.
         record_contacts: keep a record of every touching contact at the end of each run, for
             ``contacts()`` (72 bytes per contact; off by default).
+        dimension: 3 (spheres) or 2 (discs of unit thickness, 1 m, for plane tests): centres
+            lie in the plane z = ``plane_z`` (the domain's mid-height); z, v_z, w_x and w_y stay
+            frozen (velocities zero), m = rho pi r^2 x 1 m, I = m r^2 / 2. Contact laws are the
+            3-D ones (a Hertz force in 2-D is the force between the discs' sphere equivalents,
+            not a line-contact law): forces are N on a 1 m thick disc, so a wall force / wall
+            length is a stress per unit thickness (Pa).
 
     Example:
         >>> import grainscale as gs
@@ -122,11 +128,15 @@ class Simulation:
         thermo_every: int | None = None,
         quiet: bool = False,
         record_contacts: bool = False,
+        dimension: int = 3,
     ) -> None:
         if not isinstance(domain, Box):
             raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
+        if isinstance(dimension, bool) or dimension not in (2, 3):
+            raise ValueError(f"Simulation.dimension must be 2 or 3, got {dimension!r}")
         self.domain = domain
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic)
+        self._level.set_dimension(int(dimension))
         self._materials: list[Material] = []
         self.contact: ContactLaw = contact if contact is not None else HertzMindlin()
         if not isinstance(self.contact, HertzMindlin | Linear | EEPA):
@@ -162,6 +172,16 @@ class Simulation:
         self._outlets: list[OutletHandle] = []
 
     # ----------------------------------------------------------------- configuration
+    @property
+    def dimension(self) -> int:
+        """3 (spheres) or 2 (discs in the plane z = plane_z)."""
+        return int(self._level.dimension)
+
+    @property
+    def plane_z(self) -> float:
+        """z of the particles' plane in 2-D mode (the domain's mid-height, m)."""
+        return float(self._level.plane_z)
+
     @property
     def time_step(self) -> float | None:
         """Time step (s); None until resolved at the first run."""
@@ -209,10 +229,11 @@ class Simulation:
         velocity: np.ndarray | Sequence[float] | None = None,
         angular_velocity: np.ndarray | Sequence[float] | None = None,
     ) -> np.ndarray:
-        """Add spheres; returns their global ids (int64, never reused).
+        """Add spheres (discs in 2-D); returns their global ids (int64, never reused).
 
         Args:
-            position: (N, 3) centres, m. Must lie inside the domain on closed axes.
+            position: (N, 3) centres, m. Must lie inside the domain on closed axes; in 2-D, z
+                must equal ``plane_z`` (v_z, w_x and w_y given are set to zero).
             radius: scalar or (N,) radii, m.
             material: their material.
             velocity: (N, 3) or (3,) m/s, default zero.
