@@ -73,9 +73,9 @@ struct SpringDashpotRolling {
     rotate_into_tangent_plane(spring, c.normal);
     spring -= (kr * c.dt) * wr;
     const Real limit = p.friction * c.r_eff * std::abs(k.normal_force);
-    const Real m = spring.norm();
-    if (m > limit) {
-      spring *= limit / m;  // fully mobilised: plastic, no damping
+    const Real m2 = spring.squaredNorm();  // the square root only when the limit is reached
+    if (m2 > limit * limit) {
+      spring *= limit / std::sqrt(m2);  // fully mobilised: plastic, no damping
       return spring;
     }
     if (kEPSD2 || p.damping == 0) return spring;
