@@ -195,7 +195,7 @@ def report(case: BiaxialCase, summary: dict[str, Any], command: str, wall: float
         "# Biaxial test: coarse-grain precision vs scale factor (CASES.md E2)",
         "",
         "2-D discs (unit thickness, `Simulation(dimension=2)`), same specimen for every h, radii",
-        "x h, cg rule of `biaxial_run.cg_parameters` (linear k_n invariant, Hertz E x 1/h, time",
+        "x h, cg rule of `grainscale.scaling` in 2-D (linear k_n invariant, Hertz E x 1/h, time",
         "step x h). Reference: Zhang, Huang & Zhao 2021 (PFC2D, 20 samples per h): error of the",
         "gradient of average contact force vs axial strain about 2 % at h = 2, 3 % at h = 4.",
         "",

@@ -7,7 +7,8 @@ axial strain rate by the top and bottom walls while the lateral walls hold the c
 Stresses are per unit thickness: wall force / (wall length x 1 m).
 
 The coarse-grained specimen of scale h has the same size, radii x h and the cg parameters of
-``cg_parameters`` below; see biaxial.py for the study over h and samples.
+``cg_parameters`` below (from ``grainscale.scaling``); see biaxial.py for the study over h and
+samples.
 """
 
 from __future__ import annotations
@@ -51,23 +52,41 @@ class BiaxialCase:
 
 
 def cg_parameters(case: BiaxialCase, h: float) -> dict[str, float]:
-    """The cg rule for discs of unit thickness at scale h (same specimen, radii x h).
+    """The cg rule for discs of unit thickness at scale h (same specimen, radii x h), from
+    ``grainscale.scaling.scale(..., "cg", dimension=2)``.
 
-    Exact scaling in 2-D per unit thickness (Feng & Owen 2014; Zhang et al. 2021 eq. 35):
-    length h, density 1, time h, force h, stress 1. A linear spring k = F/delta is then
-    invariant; the Hertz sphere law F = 4/3 E* sqrt(R*) delta^(3/2) gives F ~ E h^2, so E
-    must scale as 1/h to keep the stress (and the force ~ h) right. Restitution and friction are
-    invariant (the dashpot follows from e and m*, so it scales as h); the time step scales as h.
-    TODO: take these from grainscale.scaling (cg rule, 2-D) once that module is merged.
+    Per unit thickness (Feng & Owen 2014; Zhang et al. 2021 eq. 35) force scales as h and
+    stress as 1: a linear spring k = F/delta is invariant; the Hertz sphere law F = 4/3 E*
+    sqrt(R*) delta^(3/2) on a disc gives F ~ E h^2, so the module scales E as 1/h. Restitution
+    and friction are invariant (the dashpot follows from e and m*); the time step scales as h.
     """
     m1 = case.density * math.pi * case.mean_radius**2
     # Contact time of two mean discs, pi sqrt(m*/k); 1/15 of it per step.
     dt1 = math.pi * math.sqrt(0.5 * m1 / contact_stiffness(case)) / 15.0
+    grain = gs.Material(
+        density=case.density, youngs_modulus=case.youngs_modulus, poisson_ratio=case.poisson_ratio
+    )
+    law: gs.contact.ContactLaw = (
+        gs.contact.Linear(normal_stiffness=case.normal_stiffness)
+        if case.law == "linear"
+        else gs.contact.HertzMindlin()
+    )
+    reference = gs.scaling.ParameterSet(
+        domain=gs.Box(lo=(0.0, 0.0, -0.01), hi=(case.width, case.height, 0.01)),
+        contact=law,
+        gravity=(0.0, 0.0, 0.0),
+        time_step=dt1,
+        size=gs.dist.Monodisperse(case.mean_radius),
+        materials=[grain],
+    )
+    scaled = gs.scaling.scale(reference, h, "cg", dimension=2).params
+    size = scaled.size
+    assert isinstance(size, gs.dist.Monodisperse) and scaled.time_step is not None
     return {
-        "radius": case.mean_radius * h,
-        "normal_stiffness": case.normal_stiffness,  # invariant (linear)
-        "youngs_modulus": case.youngs_modulus / h,  # hertz
-        "time_step": dt1 * h,
+        "radius": size.radius,
+        "normal_stiffness": getattr(scaled.contact, "normal_stiffness", case.normal_stiffness),
+        "youngs_modulus": scaled.materials[0].youngs_modulus,
+        "time_step": scaled.time_step,
     }
 
 
