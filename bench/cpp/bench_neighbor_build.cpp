@@ -67,8 +67,8 @@ Row run_case(const std::string& name, Index n, bool poly, int reps) {
   grainscale::ContactList list;
   list.history_stride = 3;
   grid.build(ps.position.data(), ps.n_local(), cutoff, 2 * static_cast<std::size_t>(n) + 64);
-  const bench::Timing list_t =
-      bench::median_ns(reps, [] {}, [&] { grainscale::build_pair_list(ps, grid, skin, list); });
+  const bench::Timing list_t = bench::median_ns(
+      reps, [] {}, [&] { grainscale::build_pair_list(ps, grid, cutoff, skin, list); });
 
   // In the same run: cells of half the cut-off (5 x 5 x 5 stencil; Level's for ratios >= 2).
   grainscale::CellGrid fine;
@@ -76,7 +76,7 @@ Row run_case(const std::string& name, Index n, bool poly, int reps) {
   grainscale::ContactList fine_list;
   fine_list.history_stride = 3;
   const bench::Timing fine_t = bench::median_ns(
-      reps, [] {}, [&] { grainscale::build_pair_list(ps, fine, skin, fine_list); });
+      reps, [] {}, [&] { grainscale::build_pair_list(ps, fine, cutoff, skin, fine_list); });
   bench::report("build_pair_list_" + name + "_half_cells", fine_t, n, "ns/particle", n, reps);
   std::printf("  half-cut-off cells / cut-off cells time ratio: %.3f (wall), %.3f (cpu)\n",
               fine_t.wall_ns / list_t.wall_ns, fine_t.cpu_ns / list_t.cpu_ns);

@@ -113,7 +113,7 @@ void make_packing(Index n, int history_stride, Packing& p) {
   grainscale::CellGrid grid;
   grid.build(p.ps.position.data(), p.ps.n_local(), d + skin, 2 * static_cast<std::size_t>(n) + 64);
   p.list.history_stride = history_stride;
-  grainscale::build_pair_list(p.ps, grid, skin, p.list);
+  grainscale::build_pair_list(p.ps, grid, d + skin, skin, p.list);
 }
 
 void bench_force_loop(Index n, grainscale::TangentialHistory history, const std::string& name,

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from settle_case import liggghts_script
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -243,39 +244,11 @@ def write_liggghts_data(path: Path, case: HopperCase, pos: FloatArray, vel: Floa
 
 def liggghts_input(case: HopperCase, data_file: str, stl_file: str) -> str:
     """LIGGGHTS 3.8 input script: the STL hopper as one mesh wall/gran, lost atoms deleted."""
-    return f"""\
-# grainscale 'hopper' benchmark, N = {case.n_particles}
-units           si
-atom_style      granular
-atom_modify     map array
-boundary        f f f
-newton          off
-communicate     single vel yes
-read_data       {data_file}
-neighbor        {case.skin!r} bin
-neigh_modify    delay 0
-
-fix m1 all property/global youngsModulus peratomtype {case.youngs_modulus!r}
-fix m2 all property/global poissonsRatio peratomtype {case.poisson_ratio!r}
-fix m3 all property/global coefficientRestitution peratomtypepair 1 {case.restitution!r}
-fix m4 all property/global coefficientFriction peratomtypepair 1 {case.friction!r}
-
-pair_style      gran model hertz tangential history
-pair_coeff      * *
-timestep        {case.time_step!r}
-
-fix gravi all gravity {case.gravity!r} vector 0.0 0.0 -1.0
-fix hopper all mesh/surface file {stl_file} type 1
-fix walls all wall/gran model hertz tangential history mesh n_meshes 1 meshes hopper
-fix integr all nve/sphere
-
-compute         rke all erotate/sphere
-variable        zmean equal xcm(all,z)
-thermo_style    custom step atoms ke c_rke v_zmean
-thermo_modify   lost ignore norm no
-thermo          {case.sample_every}
-run             {case.steps}
-"""
+    wall_lines = (
+        f"fix hopper all mesh/surface file {stl_file} type 1\n"
+        "fix walls all wall/gran model hertz tangential history mesh n_meshes 1 meshes hopper"
+    )
+    return liggghts_script("hopper", case, data_file, wall_lines, case.sample_every, lost="ignore")
 
 
 def mean_count(steps: list[float], counts: list[float]) -> float:

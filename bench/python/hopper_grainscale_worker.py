@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 from hopper_case import HopperCase
+from settle_grainscale_worker import liggghts_matched_simulation, load_state
 
 
 def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> dict[str, Any]:
@@ -27,36 +28,12 @@ def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> di
     import grainscale as gs  # imported here so that import time is outside the timed section
 
     core_mtime = Path(gs._core.__file__).stat().st_mtime  # tells whether a reinstall happened
-    state = np.load(state_file)
-    position = np.ascontiguousarray(state["position"], dtype=np.float64)
-    velocity = np.ascontiguousarray(state["velocity"], dtype=np.float64)
+    position, velocity = load_state(state_file)
     rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
     t_setup = time.perf_counter()
-    mat = gs.Material(
-        density=case.density,
-        youngs_modulus=case.youngs_modulus,
-        poisson_ratio=case.poisson_ratio,
-        name="glass",
-    )
-    law = gs.contact.HertzMindlin(
-        restitution=case.restitution,
-        friction=case.friction,
-        limit_force=False,  # LIGGGHTS default: limitForce off
-        tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
-        tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
-    )
     lo, hi = case.box_lo, case.box_hi
-    sim = gs.Simulation(
-        domain=gs.Box(lo=lo, hi=hi, periodic=(False, False, False)),
-        contact=law,
-        gravity=(0.0, 0.0, -case.gravity),
-        time_step=case.time_step,
-        skin=case.skin,
-    )
-    sim.add_particles(
-        position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
-    )
+    sim, mat = liggghts_matched_simulation(gs, case, lo, hi, position, velocity)
     mesh = gs.geometry.Mesh.from_stl(stl_file, material=mat)  # hopper of the particle material
     sim.add_wall(mesh)
     outlet = None

@@ -120,8 +120,18 @@ def liggghts_input(case: SettleCase, data_file: str, thermo_every: int = 1000) -
         f"primitive type 1 {style} {value!r}"
         for name, style, value in walls
     )
+    return liggghts_script("settle", case, data_file, wall_lines, thermo_every, lost="error")
+
+
+def liggghts_script(
+    name: str, case: Any, data_file: str, wall_lines: str, thermo_every: int, lost: str
+) -> str:
+    """The LIGGGHTS 3.8 input shared by the benchmarks: one particle type, Hertz with tangential
+    history, gravity along -z, the given wall fixes, nve/sphere, thermo of atoms, KE, rotational
+    KE and mean z. ``case`` has the fields of SettleCase's physics (n_particles, skin, moduli,
+    restitution, friction, time_step, gravity, steps); ``lost``: LIGGGHTS' thermo_modify lost."""
     return f"""\
-# grainscale 'settle' benchmark, N = {case.n_particles}
+# grainscale '{name}' benchmark, N = {case.n_particles}
 units           si
 atom_style      granular
 atom_modify     map array
@@ -148,7 +158,7 @@ fix integr all nve/sphere
 compute         rke all erotate/sphere
 variable        zmean equal xcm(all,z)
 thermo_style    custom step atoms ke c_rke v_zmean
-thermo_modify   lost error norm no
+thermo_modify   lost {lost} norm no
 thermo          {thermo_every}
 run             {case.steps}
 """

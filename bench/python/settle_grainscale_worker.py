@@ -24,36 +24,12 @@ def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
     """Build the case with the grainscale API, run it and return timings and observables."""
     import grainscale as gs  # imported here so that import time is outside the timed section
 
-    state = np.load(state_file)
-    position = np.ascontiguousarray(state["position"], dtype=np.float64)
-    velocity = np.ascontiguousarray(state["velocity"], dtype=np.float64)
+    position, velocity = load_state(state_file)
     rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
     t_setup = time.perf_counter()
-    mat = gs.Material(
-        density=case.density,
-        youngs_modulus=case.youngs_modulus,
-        poisson_ratio=case.poisson_ratio,
-        name="glass",
-    )
-    law = gs.contact.HertzMindlin(
-        restitution=case.restitution,
-        friction=case.friction,
-        limit_force=False,  # LIGGGHTS default: limitForce off
-        tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
-        tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
-    )
     hi = case.box_hi
-    sim = gs.Simulation(
-        domain=gs.Box(lo=(0.0, 0.0, 0.0), hi=hi, periodic=(False, False, False)),
-        contact=law,
-        gravity=(0.0, 0.0, -case.gravity),
-        time_step=case.time_step,
-        skin=case.skin,
-    )
-    sim.add_particles(
-        position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
-    )
+    sim, mat = liggghts_matched_simulation(gs, case, (0.0, 0.0, 0.0), hi, position, velocity)
     # six one-sided planes of the particle material; normals point into the box
     walls = [
         ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
@@ -95,6 +71,51 @@ def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
         "thermo": thermo,
         "rss_before_sim_kib": rss_before_kib,
     }
+
+
+def load_state(state_file: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Initial positions and velocities written by the driver."""
+    state = np.load(state_file)
+    position = np.ascontiguousarray(state["position"], dtype=np.float64)
+    velocity = np.ascontiguousarray(state["velocity"], dtype=np.float64)
+    return position, velocity
+
+
+def liggghts_matched_simulation(
+    gs: Any,
+    case: Any,
+    lo: tuple[float, float, float],
+    hi: tuple[float, float, float],
+    position: np.ndarray,
+    velocity: np.ndarray,
+) -> tuple[Any, Any]:
+    """A closed box with gravity along -z, the particles, and the material and Hertz-Mindlin law
+    set as LIGGGHTS' 'gran model hertz tangential history' (shared by the benchmark workers;
+    ``case`` has the fields of SettleCase's physics). Returns (simulation, material)."""
+    mat = gs.Material(
+        density=case.density,
+        youngs_modulus=case.youngs_modulus,
+        poisson_ratio=case.poisson_ratio,
+        name="glass",
+    )
+    law = gs.contact.HertzMindlin(
+        restitution=case.restitution,
+        friction=case.friction,
+        limit_force=False,  # LIGGGHTS default: limitForce off
+        tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
+        tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
+    )
+    sim = gs.Simulation(
+        domain=gs.Box(lo=lo, hi=hi, periodic=(False, False, False)),
+        contact=law,
+        gravity=(0.0, 0.0, -case.gravity),
+        time_step=case.time_step,
+        skin=case.skin,
+    )
+    sim.add_particles(
+        position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
+    )
+    return sim, mat
 
 
 def _plain(value: Any) -> Any:

@@ -408,7 +408,7 @@ void Level::rebuild() {
     grid_.renumber_sorted();
   else
     grid_.build_for_pairs(ps_.position.data(), ps_.n_local(), cutoff, size_ratio);
-  build_pair_list(ps_, grid_, skin_, pairs_);
+  build_pair_list(ps_, grid_, cutoff, skin_, pairs_);
   // Mesh bins: once for a wall at rest, again after it moved or the reach grew.
   const Real margin = r_max + skin_;
   for (std::size_t w = 0; w < walls_.size(); ++w) {

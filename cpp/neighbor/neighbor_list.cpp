@@ -5,14 +5,13 @@
 
 namespace grainscale {
 
-void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list) {
+void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff, Real skin,
+                     ContactList& list) {
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
   const Real* r = ps.radius.data();
   const GlobalId* id = ps.id.data();
-  Real r_max = 0;
-  for (Index i = 0; i < ps.n_local(); ++i) r_max = std::max(r_max, r[i]);
-  const auto R = grid.reach(2 * r_max + skin);
+  const auto R = grid.reach(cutoff);
 
   // Every unordered pair of cells is visited once: for the particle in grid slot p, the later
   // slots of its own cell and the cells "after" it (higher z, or same z and higher y, or same z

@@ -35,7 +35,9 @@ struct ContactList {
 };
 
 // Builds the particle half list from a grid binned over all local (owned + ghost) particles.
-void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real skin, ContactList& list);
+// cutoff: the largest pair cut-off, 2 r_max + skin over the local particles (sets the stencil).
+void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff, Real skin,
+                     ContactList& list);
 
 // Builds the particle-wall list. Entries are wall primitives: primitive_first[w] + t for
 // triangle t of a mesh wall w, primitive_first[w] for any other wall; per particle they come in

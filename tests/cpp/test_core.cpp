@@ -89,7 +89,7 @@ void build_list(const gs::ParticleStore& ps, Real skin, std::size_t max_cells,
   for (Index i = 0; i < ps.n_owned(); ++i) r_max = std::max(r_max, ps.radius[i]);
   gs::CellGrid grid;
   grid.build(ps.position.data(), ps.n_local(), cell_fraction * (2 * r_max + skin), max_cells);
-  gs::build_pair_list(ps, grid, skin, list);
+  gs::build_pair_list(ps, grid, 2 * r_max + skin, skin, list);
 }
 
 // ---------------------------------------------------------------------------------------------
