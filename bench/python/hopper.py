@@ -32,9 +32,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import datetime as dt
 import json
-import os
 import re
 import shutil
 import statistics
@@ -46,6 +44,20 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bench_common import (
+    CODES,
+    BenchmarkError,
+    check_grainscale,
+    ensure_liggghts,
+    failure,
+    paired_ratios,
+    run_grainscale_worker,
+    run_liggghts_log,
+    run_measured,
+    run_rounds,
+    single_thread_env,
+    write_results,
+)
 from hopper_case import (
     HopperCase,
     hopper_mesh,
@@ -55,20 +67,11 @@ from hopper_case import (
     write_binary_stl,
     write_liggghts_data,
 )
-from settle import (
-    BenchmarkError,
-    check_grainscale,
-    ensure_liggghts,
-    machine_info,
-    parse_liggghts_log,
-    single_thread_env,
-)
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 WORKER = HERE / "hopper_grainscale_worker.py"
 DEFAULT_OUTPUT = REPO / "bench" / "results" / "hopper.json"
-CODES = ("grainscale", "liggghts")
 THERMO_KEYS = ("Step", "atoms", "ke", "rke", "zmean")
 BREAKDOWN_RE = re.compile(r"^(Pair|Neigh|Comm|Outpt|Other)\s+time \(%\) = ([0-9.eE+-]+)", re.M)
 
@@ -116,16 +119,6 @@ def prepare_inputs(case: HopperCase, workdir: Path) -> None:
     (workdir / "case.json").write_text(json.dumps(dataclasses.asdict(case)))
 
 
-def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int, float]:
-    """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB,
-    CPU seconds (user + system) of the process)."""
-    with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
-        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
-    return proc.returncode, int(usage.ru_maxrss), usage.ru_utime + usage.ru_stime
-
-
 def liggghts_setup_cpu(exe: str, workdir: Path) -> float:
     """CPU seconds of a LIGGGHTS process that sets the case up and runs 0 steps (read_data,
     mesh import, first neighbour lists): subtracted from the CPU time of the real runs."""
@@ -134,22 +127,10 @@ def liggghts_setup_cpu(exe: str, workdir: Path) -> float:
         cmd = [exe, "-in", "../in.hopper_setup", "-log", "log.hopper"]
         rc, _, cpu = run_measured(cmd, rundir, single_thread_env())
         if rc != 0:
-            raise _failure("liggghts (setup only)", rc, rundir, "log.hopper", "stdout.txt")
+            raise failure("liggghts (setup only)", rc, rundir, "log.hopper", "stdout.txt")
     finally:
         shutil.rmtree(rundir, ignore_errors=True)
     return cpu
-
-
-def _tail(path: Path, lines: int = 25) -> str:
-    if not path.exists():
-        return ""
-    return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
-
-
-def _failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
-    parts = [f"{code} failed with exit code {rc} in {rundir}"]
-    parts += [f"--- {name}:\n{_tail(rundir / name)}" for name in files if (rundir / name).exists()]
-    return BenchmarkError("\n".join(parts))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -159,17 +140,8 @@ def _failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
 def run_liggghts(
     exe: str, case: HopperCase, workdir: Path, rnd: int, setup_cpu: float
 ) -> RunResult:
-    rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
-    try:
-        load = os.getloadavg()[0]
-        cmd = [exe, "-in", "../in.hopper", "-log", "log.hopper"]
-        rc, rss, cpu = run_measured(cmd, rundir, single_thread_env())
-        if rc != 0:
-            raise _failure("liggghts", rc, rundir, "log.hopper", "stdout.txt", "stderr.txt")
-        text = (rundir / "log.hopper").read_text(errors="replace")
-        log = parse_liggghts_log(text)
-    finally:
-        shutil.rmtree(rundir, ignore_errors=True)
+    log = run_liggghts_log(exe, workdir, "in.hopper", "log.hopper")
+    cpu = float(log["cpu_seconds"])
     if log["procs"] != 1 or log["steps"] != case.steps:
         raise BenchmarkError(f"unexpected LIGGGHTS loop line: {log}")
     samples = [
@@ -190,13 +162,13 @@ def run_liggghts(
         cpu_ns_per_particle_step=(cpu - setup_cpu) / (case.steps * n_mean) * 1e9,
         cpu_seconds=cpu - setup_cpu,
         mean_particles=n_mean,
-        maxrss_kib=rss,
+        maxrss_kib=log["maxrss_kib"],
         n_final=int(last["atoms"]),
         ke_trans_final=float(last["ke"]),
         ke_rot_final=float(last["rke"]),
         mean_z_final=float(last["zmean"]),
         neighbor_builds=int(log["neighbor_builds"] or -1),
-        loadavg_1min=load,
+        loadavg_1min=log["loadavg_1min"],
         samples=samples,
         warnings=log["warnings"],
         extra={
@@ -204,37 +176,24 @@ def run_liggghts(
             "memory_per_proc_mbytes": log["memory_mbytes"],
             "dangerous_builds": log["dangerous_builds"],
             "time_breakdown_seconds": {  # Other: fixes (mesh wall, integration, gravity)
-                m.group(1).lower(): float(m.group(2)) for m in BREAKDOWN_RE.finditer(text)
+                m.group(1).lower(): float(m.group(2)) for m in BREAKDOWN_RE.finditer(log["text"])
             },
         },
     )
 
 
 def run_grainscale(case: HopperCase, workdir: Path, rnd: int, deletion: str) -> RunResult:
-    rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
-    try:
-        load = os.getloadavg()[0]
-        cmd = [
-            sys.executable,
-            str(WORKER),
-            "--case",
-            str(workdir / "case.json"),
-            "--state",
-            str(workdir / "state.npz"),
-            "--stl",
-            str(workdir / "hopper.stl"),
-            "--deletion",
-            deletion,
-            "--output",
-            "result.json",
-        ]
-        rc, rss, _ = run_measured(cmd, rundir, single_thread_env())
-        if rc != 0 or not (rundir / "result.json").exists():
-            raise _failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
-        res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
-        stderr = (rundir / "stderr.txt").read_text(errors="replace")
-    finally:
-        shutil.rmtree(rundir, ignore_errors=True)
+    options = [
+        "--case",
+        str(workdir / "case.json"),
+        "--state",
+        str(workdir / "state.npz"),
+        "--stl",
+        str(workdir / "hopper.stl"),
+        "--deletion",
+        deletion,
+    ]
+    res, rss, load, warnings = run_grainscale_worker(WORKER, workdir, options)
     seconds = float(res.pop("run_seconds"))
     cpu = float(res.pop("cpu_seconds"))
     samples = res.pop("samples")
@@ -255,7 +214,7 @@ def run_grainscale(case: HopperCase, workdir: Path, rnd: int, deletion: str) -> 
         neighbor_builds=int(res.pop("neighbor_builds")),
         loadavg_1min=load,
         samples=samples,
-        warnings=[ln.strip() for ln in stderr.splitlines() if "warn" in ln.lower()],
+        warnings=warnings,
         extra=res | {"deletion": deletion},
     )
 
@@ -272,41 +231,37 @@ def bench_size(
     deletion: str,
     keep: bool,
 ) -> dict[str, Any]:
-    workdir = Path(tempfile.mkdtemp(prefix=f"grainscale_hopper_{case.n_particles}_"))
-    try:
+    setup_cpu = 0.0
+
+    def prepare(workdir: Path) -> None:
+        nonlocal setup_cpu
         prepare_inputs(case, workdir)
-        runs: list[RunResult] = []
         setup_cpu = liggghts_setup_cpu(liggghts_exe, workdir) if liggghts_exe else 0.0
-        for rnd in range(repeats):
-            for code in codes:
-                print(f"  round {rnd + 1}/{repeats}: {code:<10s} ... ", end="", flush=True)
-                if code == "liggghts":
-                    assert liggghts_exe is not None
-                    res = run_liggghts(liggghts_exe, case, workdir, rnd, setup_cpu)
-                else:
-                    res = run_grainscale(case, workdir, rnd, deletion)
-                runs.append(res)
-                print(
-                    f"{res.ns_per_particle_step:8.1f} ns/particle-step "
-                    f"(CPU {res.cpu_ns_per_particle_step:.1f}), "
-                    f"{res.run_seconds:7.2f} s, peak RSS {res.maxrss_kib / 1024:7.1f} MiB, "
-                    f"{case.n_particles - res.n_final} discharged, load {res.loadavg_1min:.1f}"
-                    + (f", {len(res.warnings)} warning line(s)" if res.warnings else ""),
-                    flush=True,
-                )
-    finally:
-        if keep:
-            print(f"  inputs kept in {workdir}")
-        else:
-            shutil.rmtree(workdir, ignore_errors=True)
+
+    def run(code: str, workdir: Path, rnd: int) -> RunResult:
+        if code == "liggghts":
+            assert liggghts_exe is not None
+            return run_liggghts(liggghts_exe, case, workdir, rnd, setup_cpu)
+        return run_grainscale(case, workdir, rnd, deletion)
+
+    def describe(res: Any) -> str:
+        return (
+            f" (CPU {res.cpu_ns_per_particle_step:.1f}), {case.n_particles - res.n_final} "
+            f"discharged, load {res.loadavg_1min:.1f}"
+        )
+
+    runs, stamp = run_rounds(
+        "hopper", case.n_particles, codes, repeats, keep, prepare, run, describe
+    )
+    mine: list[RunResult] = [r for r in runs if isinstance(r, RunResult)]
     return {
-        "timestamp": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "timestamp": stamp,
         "case": case.to_dict(),
         "repeats": repeats,
         "liggghts_setup_cpu_seconds": setup_cpu,
         "grainscale_deletion": deletion,
-        "runs": [dataclasses.asdict(r) for r in runs],
-        "summary": summarize(case, runs),
+        "runs": [dataclasses.asdict(r) for r in mine],
+        "summary": summarize(case, mine),
     }
 
 
@@ -342,17 +297,8 @@ def summarize(case: HopperCase, runs: list[RunResult]) -> dict[str, Any]:
         baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
         if baseline:  # grainscale: interpreter, imports, initial state
             summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
-    by_round: dict[int, dict[str, RunResult]] = {}
-    for r in runs:
-        by_round.setdefault(r.round, {})[r.code] = r
-    pairs = [d for d in by_round.values() if len(d) == 2]
-    ratios = [
-        d["grainscale"].ns_per_particle_step / d["liggghts"].ns_per_particle_step for d in pairs
-    ]
-    cpu_ratios = [
-        d["grainscale"].cpu_ns_per_particle_step / d["liggghts"].cpu_ns_per_particle_step
-        for d in pairs
-    ]
+    ratios = paired_ratios(runs, "ns_per_particle_step")
+    cpu_ratios = paired_ratios(runs, "cpu_ns_per_particle_step")
     if ratios:
         gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
         summary["ratio_grainscale_over_liggghts"] = {
@@ -482,28 +428,6 @@ def print_table(entry: dict[str, Any]) -> None:
         print(f"  warning: {w}")
 
 
-def write_results(path: Path, entries: dict[str, dict[str, Any]], args: argparse.Namespace) -> None:
-    """Merge the new per-size entries into ``path`` (other sizes already there are kept)."""
-    data: dict[str, Any] = {}
-    if path.exists():
-        try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError:
-            data = {}
-    data["benchmark"] = "hopper"
-    data["machine"] = machine_info()
-    data["last_command"] = {
-        "sizes": args.sizes,
-        "steps": args.steps,
-        "repeats": args.repeats,
-        "quick": args.quick,
-        "deletion": args.deletion,
-    }
-    data.setdefault("sizes", {}).update(entries)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1))
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -553,7 +477,14 @@ def main(argv: list[str] | None = None) -> int:
             except ValueError as exc:  # e.g. more particles than the hopper holds
                 raise BenchmarkError(str(exc)) from exc
             entries[str(n)] = entry
-            write_results(args.output, entries, args)  # after every size: partial results survive
+            command = {
+                "sizes": args.sizes,
+                "steps": args.steps,
+                "repeats": args.repeats,
+                "quick": args.quick,
+                "deletion": args.deletion,
+            }
+            write_results(args.output, "hopper", entries, command)  # partial results survive
     except BenchmarkError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

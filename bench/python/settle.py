@@ -29,33 +29,31 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import datetime as dt
 import json
-import os
-import platform
-import re
-import shutil
 import statistics
-import subprocess
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bench_common import (
+    CODES,
+    BenchmarkError,
+    check_grainscale,
+    ensure_liggghts,
+    paired_ratios,
+    run_grainscale_worker,
+    run_liggghts_log,
+    run_rounds,
+    write_results,
+)
 from settle_case import SettleCase, initial_state, liggghts_input, write_liggghts_data
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 WORKER = HERE / "settle_grainscale_worker.py"
 DEFAULT_OUTPUT = REPO / "bench" / "results" / "settle.json"
-CODES = ("grainscale", "liggghts")
-
-LOOP_RE = re.compile(
-    r"Loop time of\s+([0-9.eE+-]+)\s+on\s+(\d+)\s+procs\s+"
-    r"for\s+(\d+)\s+steps\s+with\s+(\d+)\s+atoms"
-)
 
 
 @dataclass
@@ -80,41 +78,8 @@ class RunResult:
         return self.ke_trans_final + self.ke_rot_final
 
 
-class BenchmarkError(RuntimeError):
-    pass
-
-
 # ---------------------------------------------------------------------------------------------
 # set-up
-
-
-def ensure_liggghts() -> str:
-    """Path of the ``liggghts`` executable; installs the Debian package when it is missing."""
-    exe = shutil.which("liggghts")
-    if exe:
-        return exe
-    prefix = ["env", "DEBIAN_FRONTEND=noninteractive"]
-    if os.geteuid() != 0:
-        prefix = ["sudo", *prefix]
-    install = [*prefix, "apt-get", "install", "-y", "liggghts"]
-    print("liggghts not found, installing the Debian package:", " ".join(install), flush=True)
-    if subprocess.run(install).returncode != 0:
-        subprocess.run([*prefix, "apt-get", "update"], check=True)
-        subprocess.run(install, check=True)
-    exe = shutil.which("liggghts")
-    if not exe:
-        raise BenchmarkError("apt-get install liggghts succeeded but 'liggghts' is not on PATH")
-    return exe
-
-
-def check_grainscale() -> None:
-    probe = [sys.executable, "-c", "import grainscale, grainscale._core"]
-    proc = subprocess.run(probe, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise BenchmarkError(
-            f"grainscale is not importable by {sys.executable} (run 'make install' first, or "
-            f"use --only liggghts):\n{proc.stderr.strip()}"
-        )
 
 
 def prepare_inputs(case: SettleCase, workdir: Path) -> None:
@@ -130,44 +95,8 @@ def prepare_inputs(case: SettleCase, workdir: Path) -> None:
 # running one code
 
 
-def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int]:
-    """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB)."""
-    with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
-        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
-    return proc.returncode, int(usage.ru_maxrss)  # Linux: KiB
-
-
-def _tail(path: Path, lines: int = 25) -> str:
-    if not path.exists():
-        return ""
-    return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
-
-
-def _failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
-    parts = [f"{code} failed with exit code {rc} in {rundir}"]
-    parts += [f"--- {name}:\n{_tail(rundir / name)}" for name in files if (rundir / name).exists()]
-    return BenchmarkError("\n".join(parts))
-
-
-def single_thread_env() -> dict[str, str]:
-    env = dict(os.environ)
-    env["OMP_NUM_THREADS"] = "1"
-    return env
-
-
 def run_liggghts(exe: str, case: SettleCase, workdir: Path, rnd: int) -> RunResult:
-    rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
-    try:
-        load = os.getloadavg()[0]
-        cmd = [exe, "-in", "../in.settle", "-log", "log.settle"]
-        rc, rss = run_measured(cmd, rundir, single_thread_env())
-        if rc != 0:
-            raise _failure("liggghts", rc, rundir, "log.settle", "stdout.txt", "stderr.txt")
-        log = parse_liggghts_log((rundir / "log.settle").read_text(errors="replace"))
-    finally:
-        shutil.rmtree(rundir, ignore_errors=True)
+    log = run_liggghts_log(exe, workdir, "in.settle", "log.settle")
     if log["procs"] != 1 or log["steps"] != case.steps:
         raise BenchmarkError(f"unexpected LIGGGHTS loop line: {log}")
     last = log["thermo"][-1]
@@ -180,12 +109,12 @@ def run_liggghts(exe: str, case: SettleCase, workdir: Path, rnd: int) -> RunResu
         round=rnd,
         ns_per_particle_step=loop / (case.steps * case.n_particles) * 1e9,
         run_seconds=loop,
-        maxrss_kib=rss,
+        maxrss_kib=log["maxrss_kib"],
         n_final=n_final,
         ke_trans_final=float(last["KinEng"]),
         ke_rot_final=float(last["rke"]),
         mean_z_final=float(last["zmean"]),
-        loadavg_1min=load,
+        loadavg_1min=log["loadavg_1min"],
         warnings=log["warnings"],
         extra={
             "version": log["version"],
@@ -197,73 +126,9 @@ def run_liggghts(exe: str, case: SettleCase, workdir: Path, rnd: int) -> RunResu
     )
 
 
-def parse_liggghts_log(text: str) -> dict[str, Any]:
-    """Loop time, last thermo block, warnings and a few diagnostics from a LIGGGHTS log."""
-    match = LOOP_RE.search(text)
-    if not match:
-        raise BenchmarkError("no 'Loop time' line in the LIGGGHTS log:\n" + text[-2000:])
-    lines = text.splitlines()
-    header: list[str] = []
-    rows: list[dict[str, float]] = []
-    for line in lines:
-        words = line.split()
-        if words[:1] == ["Step"]:
-            header, rows = [w.removeprefix("c_").removeprefix("v_") for w in words], []
-        elif header and len(words) == len(header) and _all_numbers(words):
-            rows.append(dict(zip(header, map(float, words), strict=True)))
-        elif line.startswith("Loop time"):
-            header = []
-    if not rows:
-        raise BenchmarkError("no thermo output in the LIGGGHTS log")
-
-    def first_number(pattern: str) -> float | None:
-        m = re.search(pattern, text)
-        return float(m.group(1)) if m else None
-
-    return {
-        "loop_seconds": float(match.group(1)),
-        "procs": int(match.group(2)),
-        "steps": int(match.group(3)),
-        "atoms": int(match.group(4)),
-        "thermo": rows,
-        "warnings": [ln.strip() for ln in lines if "WARNING" in ln or "ERROR" in ln],
-        "version": lines[0].strip() if lines else "",
-        "memory_mbytes": first_number(r"Memory usage per processor = ([0-9.eE+-]+)"),
-        "neighbor_builds": first_number(r"Neighbor list builds = (\d+)"),
-        "dangerous_builds": first_number(r"Dangerous builds = (\d+)"),
-    }
-
-
-def _all_numbers(words: list[str]) -> bool:
-    try:
-        for w in words:
-            float(w)
-    except ValueError:
-        return False
-    return True
-
-
 def run_grainscale(case: SettleCase, workdir: Path, rnd: int) -> RunResult:
-    rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
-    try:
-        load = os.getloadavg()[0]
-        cmd = [
-            sys.executable,
-            str(WORKER),
-            "--case",
-            str(workdir / "case.json"),
-            "--state",
-            str(workdir / "state.npz"),
-            "--output",
-            "result.json",
-        ]
-        rc, rss = run_measured(cmd, rundir, single_thread_env())
-        if rc != 0 or not (rundir / "result.json").exists():
-            raise _failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
-        res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
-        stderr = (rundir / "stderr.txt").read_text(errors="replace")
-    finally:
-        shutil.rmtree(rundir, ignore_errors=True)
+    options = ["--case", str(workdir / "case.json"), "--state", str(workdir / "state.npz")]
+    res, rss, load, warnings = run_grainscale_worker(WORKER, workdir, options)
     if res["n_final"] != case.n_particles:
         raise BenchmarkError(f"grainscale lost particles: {res['n_final']} of {case.n_particles}")
     seconds = float(res.pop("run_seconds"))
@@ -278,7 +143,7 @@ def run_grainscale(case: SettleCase, workdir: Path, rnd: int) -> RunResult:
         ke_rot_final=float(res.pop("ke_rot_final")),
         mean_z_final=float(res.pop("mean_z_final")),
         loadavg_1min=load,
-        warnings=[ln.strip() for ln in stderr.splitlines() if "warn" in ln.lower()],
+        warnings=warnings,
         extra=res,
     )
 
@@ -290,36 +155,22 @@ def run_grainscale(case: SettleCase, workdir: Path, rnd: int) -> RunResult:
 def bench_size(
     case: SettleCase, codes: list[str], repeats: int, liggghts_exe: str | None, keep: bool
 ) -> dict[str, Any]:
-    workdir = Path(tempfile.mkdtemp(prefix=f"grainscale_settle_{case.n_particles}_"))
-    try:
-        prepare_inputs(case, workdir)
-        runs: list[RunResult] = []
-        for rnd in range(repeats):
-            for code in codes:
-                print(f"  round {rnd + 1}/{repeats}: {code:<10s} ... ", end="", flush=True)
-                if code == "liggghts":
-                    assert liggghts_exe is not None
-                    res = run_liggghts(liggghts_exe, case, workdir, rnd)
-                else:
-                    res = run_grainscale(case, workdir, rnd)
-                runs.append(res)
-                print(
-                    f"{res.ns_per_particle_step:8.1f} ns/particle-step, "
-                    f"{res.run_seconds:7.2f} s, peak RSS {res.maxrss_kib / 1024:7.1f} MiB"
-                    + (f", {len(res.warnings)} warning line(s)" if res.warnings else ""),
-                    flush=True,
-                )
-    finally:
-        if keep:
-            print(f"  inputs kept in {workdir}")
-        else:
-            shutil.rmtree(workdir, ignore_errors=True)
+    def run(code: str, workdir: Path, rnd: int) -> RunResult:
+        if code == "liggghts":
+            assert liggghts_exe is not None
+            return run_liggghts(liggghts_exe, case, workdir, rnd)
+        return run_grainscale(case, workdir, rnd)
+
+    runs, stamp = run_rounds(
+        "settle", case.n_particles, codes, repeats, keep, lambda w: prepare_inputs(case, w), run
+    )
+    mine: list[RunResult] = [r for r in runs if isinstance(r, RunResult)]
     return {
-        "timestamp": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "timestamp": stamp,
         "case": case.to_dict(),
         "repeats": repeats,
-        "runs": [dataclasses.asdict(r) | {"ke_final": r.ke_final} for r in runs],
-        "summary": summarize(runs),
+        "runs": [dataclasses.asdict(r) | {"ke_final": r.ke_final} for r in mine],
+        "summary": summarize(mine),
     }
 
 
@@ -343,14 +194,7 @@ def summarize(runs: list[RunResult]) -> dict[str, Any]:
         baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
         if baseline:  # grainscale: interpreter, imports, initial state
             summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
-    by_round: dict[int, dict[str, RunResult]] = {}
-    for r in runs:
-        by_round.setdefault(r.round, {})[r.code] = r
-    ratios = [
-        d["grainscale"].ns_per_particle_step / d["liggghts"].ns_per_particle_step
-        for d in by_round.values()
-        if len(d) == 2
-    ]
+    ratios = paired_ratios(runs, "ns_per_particle_step")
     if ratios:
         gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
         summary["ratio_grainscale_over_liggghts"] = {
@@ -404,40 +248,6 @@ def print_table(entry: dict[str, Any]) -> None:
         print(f"  warning: {w}")
 
 
-def machine_info() -> dict[str, Any]:
-    cpu = "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {
-        "cpu": cpu,
-        "logical_cpus": os.cpu_count(),
-        "platform": platform.platform(),
-        "python": sys.version.split()[0],
-        "omp_num_threads": 1,
-    }
-
-
-def write_results(path: Path, entries: dict[str, dict[str, Any]], args: argparse.Namespace) -> None:
-    """Merge the new per-size entries into ``path`` (other sizes already there are kept)."""
-    data: dict[str, Any] = {}
-    if path.exists():
-        try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError:
-            data = {}
-    data["benchmark"] = "settle"
-    data["machine"] = machine_info()
-    data["last_command"] = {"sizes": args.sizes, "steps": args.steps, "repeats": args.repeats}
-    data.setdefault("sizes", {}).update(entries)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1))
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -468,7 +278,8 @@ def main(argv: list[str] | None = None) -> int:
                 flush=True,
             )
             entries[str(n)] = bench_size(case, codes, args.repeats, liggghts_exe, args.keep)
-            write_results(args.output, entries, args)  # after every size: partial results survive
+            command = {"sizes": args.sizes, "steps": args.steps, "repeats": args.repeats}
+            write_results(args.output, "settle", entries, command)  # partial results survive
     except BenchmarkError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

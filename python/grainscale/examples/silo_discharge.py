@@ -1502,6 +1502,12 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"bed height / silo diameter (default {SiloCase.height_ratio:g})",
     )
     parser.add_argument(
+        "--head-ratio",
+        type=float,
+        default=None,
+        help=f"least bed height / D0 (default {SiloCase.head_ratio:g})",
+    )
+    parser.add_argument(
         "--silo-diameter",
         type=float,
         default=None,
@@ -1583,6 +1589,9 @@ def case_from_args(args: argparse.Namespace) -> tuple[SiloCase, list[float]]:
         base["measure_time"] = args.measure_time
     if args.height_ratio is not None:
         base["height_ratio"] = args.height_ratio
+        base.pop("fill_height", None)
+    if args.head_ratio is not None:
+        base["head_ratio"] = args.head_ratio
         base.pop("fill_height", None)
     if args.silo_diameter is not None:
         base["silo_diameter"] = args.silo_diameter * 1e-3

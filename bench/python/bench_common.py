@@ -1,0 +1,287 @@
+"""What the side-by-side benchmarks (settle.py, hopper.py) share: finding or installing
+LIGGGHTS, running a code in its own measured subprocess, reading a LIGGGHTS log, the
+round-robin driver and the results file.
+
+Each code runs in a temporary directory of its own so that its peak RSS (``ru_maxrss`` from
+``os.wait4``) and CPU time are measured alone; the codes alternate for several rounds because
+the machine is shared and noisy.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+CODES = ("grainscale", "liggghts")
+
+LOOP_RE = re.compile(
+    r"Loop time of\s+([0-9.eE+-]+)\s+on\s+(\d+)\s+procs\s+"
+    r"for\s+(\d+)\s+steps\s+with\s+(\d+)\s+atoms"
+)
+
+
+class BenchmarkError(RuntimeError):
+    pass
+
+
+class Run(Protocol):
+    """What the round-robin driver prints of a run (settle's and hopper's RunResult)."""
+
+    code: str
+    round: int
+    ns_per_particle_step: float
+    run_seconds: float
+    maxrss_kib: int
+    warnings: list[str]
+
+
+# ---------------------------------------------------------------------------------------------
+# set-up
+
+
+def ensure_liggghts() -> str:
+    """Path of the ``liggghts`` executable; installs the Debian package when it is missing."""
+    exe = shutil.which("liggghts")
+    if exe:
+        return exe
+    prefix = ["env", "DEBIAN_FRONTEND=noninteractive"]
+    if os.geteuid() != 0:
+        prefix = ["sudo", *prefix]
+    install = [*prefix, "apt-get", "install", "-y", "liggghts"]
+    print("liggghts not found, installing the Debian package:", " ".join(install), flush=True)
+    if subprocess.run(install).returncode != 0:
+        subprocess.run([*prefix, "apt-get", "update"], check=True)
+        subprocess.run(install, check=True)
+    exe = shutil.which("liggghts")
+    if not exe:
+        raise BenchmarkError("apt-get install liggghts succeeded but 'liggghts' is not on PATH")
+    return exe
+
+
+def check_grainscale() -> None:
+    probe = [sys.executable, "-c", "import grainscale, grainscale._core"]
+    proc = subprocess.run(probe, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BenchmarkError(
+            f"grainscale is not importable by {sys.executable} (run 'make install' first, or "
+            f"use --only liggghts):\n{proc.stderr.strip()}"
+        )
+
+
+def single_thread_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["OMP_NUM_THREADS"] = "1"
+    return env
+
+
+def machine_info() -> dict[str, Any]:
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "logical_cpus": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": sys.version.split()[0],
+        "omp_num_threads": 1,
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# running one code
+
+
+def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int, float]:
+    """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB,
+    CPU seconds (user + system) of the process)."""
+    with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
+        proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, int(usage.ru_maxrss), usage.ru_utime + usage.ru_stime  # KiB on Linux
+
+
+def _tail(path: Path, lines: int = 25) -> str:
+    if not path.exists():
+        return ""
+    return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+
+
+def failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
+    parts = [f"{code} failed with exit code {rc} in {rundir}"]
+    parts += [f"--- {name}:\n{_tail(rundir / name)}" for name in files if (rundir / name).exists()]
+    return BenchmarkError("\n".join(parts))
+
+
+def run_liggghts_log(exe: str, workdir: Path, script: str, log_name: str) -> dict[str, Any]:
+    """Run LIGGGHTS on ``workdir/script`` in a fresh sub-directory; return the parsed log with
+    ``text`` (the whole log), ``maxrss_kib``, ``cpu_seconds`` and ``loadavg_1min`` added."""
+    rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [exe, "-in", f"../{script}", "-log", log_name]
+        rc, rss, cpu = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0:
+            raise failure("liggghts", rc, rundir, log_name, "stdout.txt", "stderr.txt")
+        text = (rundir / log_name).read_text(errors="replace")
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    return parse_liggghts_log(text) | {
+        "text": text,
+        "maxrss_kib": rss,
+        "cpu_seconds": cpu,
+        "loadavg_1min": load,
+    }
+
+
+def run_grainscale_worker(
+    worker: Path, workdir: Path, options: Sequence[str]
+) -> tuple[dict[str, Any], int, float, list[str]]:
+    """Run a grainscale worker script (``--output result.json`` is appended) in a fresh
+    sub-directory; return (its result.json, peak RSS in KiB, 1-min load at the start, the
+    warning lines of its stderr)."""
+    rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
+    try:
+        load = os.getloadavg()[0]
+        cmd = [sys.executable, str(worker), *options, "--output", "result.json"]
+        rc, rss, _ = run_measured(cmd, rundir, single_thread_env())
+        if rc != 0 or not (rundir / "result.json").exists():
+            raise failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
+        res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
+        stderr = (rundir / "stderr.txt").read_text(errors="replace")
+    finally:
+        shutil.rmtree(rundir, ignore_errors=True)
+    warnings = [ln.strip() for ln in stderr.splitlines() if "warn" in ln.lower()]
+    return res, rss, load, warnings
+
+
+def parse_liggghts_log(text: str) -> dict[str, Any]:
+    """Loop time, last thermo block, warnings and a few diagnostics from a LIGGGHTS log."""
+    match = LOOP_RE.search(text)
+    if not match:
+        raise BenchmarkError("no 'Loop time' line in the LIGGGHTS log:\n" + text[-2000:])
+    lines = text.splitlines()
+    header: list[str] = []
+    rows: list[dict[str, float]] = []
+    for line in lines:
+        words = line.split()
+        if words[:1] == ["Step"]:
+            header, rows = [w.removeprefix("c_").removeprefix("v_") for w in words], []
+        elif header and len(words) == len(header) and _all_numbers(words):
+            rows.append(dict(zip(header, map(float, words), strict=True)))
+        elif line.startswith("Loop time"):
+            header = []
+    if not rows:
+        raise BenchmarkError("no thermo output in the LIGGGHTS log")
+
+    def first_number(pattern: str) -> float | None:
+        m = re.search(pattern, text)
+        return float(m.group(1)) if m else None
+
+    return {
+        "loop_seconds": float(match.group(1)),
+        "procs": int(match.group(2)),
+        "steps": int(match.group(3)),
+        "atoms": int(match.group(4)),
+        "thermo": rows,
+        "warnings": [ln.strip() for ln in lines if "WARNING" in ln or "ERROR" in ln],
+        "version": lines[0].strip() if lines else "",
+        "memory_mbytes": first_number(r"Memory usage per processor = ([0-9.eE+-]+)"),
+        "neighbor_builds": first_number(r"Neighbor list builds = (\d+)"),
+        "dangerous_builds": first_number(r"Dangerous builds = (\d+)"),
+    }
+
+
+def _all_numbers(words: list[str]) -> bool:
+    try:
+        for w in words:
+            float(w)
+    except ValueError:
+        return False
+    return True
+
+
+# ---------------------------------------------------------------------------------------------
+# driver and results file
+
+
+def run_rounds(
+    name: str,
+    n_particles: int,
+    codes: Sequence[str],
+    repeats: int,
+    keep: bool,
+    prepare: Callable[[Path], None],
+    run: Callable[[str, Path, int], Run],
+    describe: Callable[[Run], str] = lambda _r: "",
+) -> tuple[list[Run], str]:
+    """Prepare the inputs in a temporary directory, then run the codes in turn for ``repeats``
+    rounds (``run(code, workdir, round)``), printing one line per run; return the runs and the
+    UTC time stamp of the start."""
+    stamp = dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+    workdir = Path(tempfile.mkdtemp(prefix=f"grainscale_{name}_{n_particles}_"))
+    runs: list[Run] = []
+    try:
+        prepare(workdir)
+        for rnd in range(repeats):
+            for code in codes:
+                print(f"  round {rnd + 1}/{repeats}: {code:<10s} ... ", end="", flush=True)
+                res = run(code, workdir, rnd)
+                runs.append(res)
+                print(
+                    f"{res.ns_per_particle_step:8.1f} ns/particle-step{describe(res)}, "
+                    f"{res.run_seconds:7.2f} s, peak RSS {res.maxrss_kib / 1024:7.1f} MiB"
+                    + (f", {len(res.warnings)} warning line(s)" if res.warnings else ""),
+                    flush=True,
+                )
+    finally:
+        if keep:
+            print(f"  inputs kept in {workdir}")
+        else:
+            shutil.rmtree(workdir, ignore_errors=True)
+    return runs, stamp
+
+
+def paired_ratios(runs: Sequence[Any], attribute: str) -> list[float]:
+    """grainscale / LIGGGHTS of ``attribute`` for every round in which both codes ran."""
+    by_round: dict[int, dict[str, Any]] = {}
+    for r in runs:
+        by_round.setdefault(r.round, {})[r.code] = r
+    return [
+        getattr(d["grainscale"], attribute) / getattr(d["liggghts"], attribute)
+        for d in by_round.values()
+        if len(d) == 2
+    ]
+
+
+def write_results(
+    path: Path, benchmark: str, entries: dict[str, dict[str, Any]], command: dict[str, Any]
+) -> None:
+    """Merge the new per-size entries into ``path`` (other sizes already there are kept)."""
+    data: dict[str, Any] = {}
+    if path.exists():
+        try:
+            data = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            data = {}
+    data["benchmark"] = benchmark
+    data["machine"] = machine_info()
+    data["last_command"] = command
+    data.setdefault("sizes", {}).update(entries)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1))
