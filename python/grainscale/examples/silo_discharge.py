@@ -120,6 +120,11 @@ class SiloCase:
         outlet_every: steps between outlet checks.
         time_step: s; None: 0.2 x the Rayleigh time of the smallest sphere.
         vtk_every: particle snapshot interval (s) or None for no VTK output.
+        cg: coarse-graining ratio h >= 1: the particles (parcels h d across), time step, skin
+            and contact parameters come from ``grainscale.scaling.scale(..., "cg")`` of the
+            resolved set; the silo, bed, fill mass and measuring window stay those of the
+            resolved case (d), the outlet depth, shutter gap and pour/refill margins follow
+            the parcel size h d.
     """
 
     silo_ratio: float = 2.5
@@ -157,8 +162,11 @@ class SiloCase:
     outlet_every: int = 10
     time_step: float | None = None
     vtk_every: float | None = None
+    cg: float = 1.0
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.cg, int | float) and math.isfinite(self.cg) and self.cg >= 1):
+            raise ValueError(f"SiloCase.cg must be >= 1, got {self.cg!r}")
         if self.fill_height is not None and self.particles is not None:
             raise ValueError(
                 "SiloCase takes at most one of fill_height and particles, got "
@@ -271,7 +279,8 @@ class SiloCase:
         else:
             fill = f"bed max({self.height_ratio:g} D_s, {self.head_ratio:g} D0) deep"
         head = "constant head (outflow re-poured on top)" if self.constant_head else "draining"
-        return f"{silo}, {fill}, {head}"
+        cg = f", coarse-grained h = {self.cg:g}" if self.cg != 1 else ""
+        return f"{silo}, {fill}, {head}{cg}"
 
     def material(self) -> gs.Material:
         return gs.Material(
@@ -381,6 +390,7 @@ class DischargeResult:
     wall_clock: float  # s
     particle_steps: float
     notes: list[str] = field(default_factory=list)
+    cg: float = 1.0  # coarse-graining ratio h of the run
 
     @property
     def mass_balance_error(self) -> float:
@@ -487,12 +497,14 @@ class _Refill:
         self,
         case: SiloCase,
         seed: int,
+        size: gs.dist.Uniform,
         radius: float,
         surface: float,
         particle_mass: float,
         material: gs.Material,
     ):
         self.case, self.seed, self.radius, self.surface = case, seed, radius, surface
+        self.size = size  # of the simulated particles (parcels when coarse-grained)
         self.material = material
         self.count, self.mass, self.batches = 0, 0.0, 0
         self.volume = particle_mass / case.density
@@ -501,7 +513,7 @@ class _Refill:
         n = removed - self.count
         if n <= 0:
             return
-        case, d_max = self.case, 2 * self.case.radius_distribution.max
+        case, d_max = self.case, 2 * self.size.max
         # a slab loose enough (solid fraction <= 0.2) for random sequential addition
         thick = max(2 * d_max, n * self.volume / (0.2 * math.pi * self.radius**2))
         z0 = self.surface + d_max
@@ -512,7 +524,7 @@ class _Refill:
         ids = sim.insert(
             gs.insert.Pack(
                 region,
-                radius=case.radius_distribution,
+                radius=self.size,
                 material=self.material,
                 count=n,
                 velocity=(0.0, 0.0, -case.refill_speed),
@@ -538,6 +550,98 @@ class _Clock:
         self.particle_steps += 0.5 * (n + self.sim.num_particles) * (self.sim.step - s0)
 
 
+#: index of the shutter among the walls of a silo's ParameterSet (cylinder, floor, shutter)
+SHUTTER = 2
+
+
+@dataclass(frozen=True)
+class SiloSetup:
+    """The parameter sets of one silo (SI units).
+
+    ``reference`` holds the resolved particles (diameter d) in the silo of the resolved case;
+    ``params`` is what is simulated: the reference itself when ``case.cg`` is 1, else
+    ``scaled.params`` = ``grainscale.scaling.scale(reference, case.cg, "cg")`` (parcels h d
+    across; time step and skin x h; silo, floor, pour face, outlet and mass rate unchanged).
+    ``detail`` is the parcel diameter h d, the unit of the outlet depth, the shutter gap and
+    drop, the pour-face margins and the measuring margins (bed surface, core density).
+    """
+
+    reference: gs.scaling.ParameterSet
+    params: gs.scaling.ParameterSet
+    scaled: gs.scaling.Scaled | None
+    silo: float  # m
+    top: float  # height of the pour face, m
+    pour_time: float  # s
+    detail: float  # m
+
+
+def silo_setup(case: SiloCase, orifice: float, seed: int = 1) -> SiloSetup:
+    """The reference and simulated parameter sets of the silo of ``case`` with the orifice D0
+    (m) and the pour seeded with ``seed``: cylinder wall, annulus floor, shutter (walls 0, 1,
+    2), the pouring stream and the outlet below the floor."""
+    d = case.cg * case.diameter  # details follow the simulated particles
+    silo = case.silo_for(orifice)  # geometry follows the resolved case
+    R = 0.5 * silo
+    if not 0 < orifice < silo - 2 * d:
+        raise ValueError(
+            f"run_orifice.orifice must be in (0, silo diameter - 2 h d) = "
+            f"(0, {silo - 2 * d:g}) m, got {orifice!r}"
+        )
+    glass = case.material()
+    dist = case.radius_distribution
+    d_max = case.cg * 2 * dist.max
+    h_nom = case.nominal_height(orifice)
+    top = h_nom + max(6 * d_max, 0.15 * h_nom)  # the pouring face
+    face_radius = R - d_max
+    # the mass rate (and so the pour time) of the resolved case, poured through a face that
+    # keeps the parcels off the wall
+    area = math.pi * (R - 2 * dist.max) ** 2
+    rate = case.pour_fraction * case.density * area * case.pour_speed
+    pour_time = case.target_mass(orifice) / rate
+    s = 0.5 * orifice + d  # shutter: a square under the orifice, 0.05 d below the floor
+    # The Simulation defaults, explicit so that scale() maps them: 0.2 x the Rayleigh time of
+    # the smallest sphere, skin 0.1 x the largest diameter.
+    dt = case.time_step
+    if dt is None:
+        dt = 0.2 * gs.timestep.rayleigh_time(glass, dist.min)
+    reference = gs.scaling.ParameterSet(
+        domain=gs.Box(lo=(-R - 2 * d, -R - 2 * d, -8 * d), hi=(R + 2 * d, R + 2 * d, top + 2 * d)),
+        contact=case.contact_law(),
+        time_step=dt,
+        skin=0.1 * 2 * dist.max,
+        walls=(
+            gs.geometry.Cylinder(
+                point=(0.0, 0.0, -d), axis=(0, 0, 1), radius=R, length=top + 2 * d, material=glass
+            ),
+            annulus_mesh(0.5 * orifice, R + case.diameter, material=glass),
+            gs.Rectangle(
+                corner=(-s, -s, -0.05 * d), edge1=(2 * s, 0, 0), edge2=(0, 2 * s, 0), material=glass
+            ),
+        ),
+        size=dist,
+        insertions=(
+            gs.insert.Stream(
+                gs.insert.DiscFace(centre=(0.0, 0.0, top), normal=(0, 0, -1), radius=face_radius),
+                mass_rate=rate,
+                radius=dist,
+                material=glass,
+                velocity=(0.0, 0.0, -case.pour_speed),
+                seed=seed,
+                stop=pour_time,
+            ),
+        ),
+        outlets=(
+            gs.insert.Outlet(
+                gs.Box(lo=(-R - 2 * d, -R - 2 * d, -1.0), hi=(R + 2 * d, R + 2 * d, -1.5 * d)),
+                every=case.outlet_every,
+            ),
+        ),
+    )
+    scaled = None if case.cg == 1 else gs.scaling.scale(reference, case.cg, scheme="cg")
+    params = reference if scaled is None else scaled.params
+    return SiloSetup(reference, params, scaled, silo, top, pour_time, d)
+
+
 def run_orifice(
     case: SiloCase,
     orifice: float,
@@ -558,58 +662,20 @@ def run_orifice(
         log: callable taking a line of text (None: silent).
     """
     say = log if log is not None else (lambda _s: None)
-    d = case.diameter
-    silo = case.silo_for(orifice)
-    R = 0.5 * silo
-    if not 0 < orifice < silo - 2 * d:
-        raise ValueError(
-            f"run_orifice.orifice must be in (0, silo diameter - 2 d) = "
-            f"(0, {silo - 2 * d:g}) m, got {orifice!r}"
-        )
     t_clock = time.perf_counter()
-    glass = case.material()
-    dist = case.radius_distribution
-    d_max = 2 * dist.max
-    h_nom = case.nominal_height(orifice)
-    top = h_nom + max(6 * d_max, 0.15 * h_nom)  # the pouring face
-    domain = gs.Box(lo=(-R - 2 * d, -R - 2 * d, -8 * d), hi=(R + 2 * d, R + 2 * d, top + 2 * d))
-    sim = gs.Simulation(
-        domain=domain, contact=case.contact_law(), time_step=case.time_step, quiet=True
+    setup = silo_setup(case, orifice, seed)
+    params, d, silo, top, pour_time = (
+        setup.params,
+        setup.detail,
+        setup.silo,
+        setup.top,
+        setup.pour_time,
     )
-    sim.add_wall(
-        gs.geometry.Cylinder(
-            point=(0.0, 0.0, -d), axis=(0, 0, 1), radius=R, length=top + 2 * d, material=glass
-        )
-    )
-    floor = annulus_mesh(0.5 * orifice, R + d, material=glass)
-    sim.add_wall(floor)
-    s = 0.5 * orifice + d  # shutter: a square under the orifice, 0.05 d below the floor
-    shutter = sim.add_wall(
-        gs.Rectangle(
-            corner=(-s, -s, -0.05 * d), edge1=(2 * s, 0, 0), edge2=(0, 2 * s, 0), material=glass
-        )
-    )
-    face_radius = R - d_max
-    area = math.pi * face_radius**2
-    rate = case.pour_fraction * case.density * area * case.pour_speed
-    pour_time = case.target_mass(orifice) / rate
-    stream = sim.insert(
-        gs.insert.Stream(
-            gs.insert.DiscFace(centre=(0.0, 0.0, top), normal=(0, 0, -1), radius=face_radius),
-            mass_rate=rate,
-            radius=dist,
-            material=glass,
-            velocity=(0.0, 0.0, -case.pour_speed),
-            seed=seed,
-            stop=pour_time,
-        )
-    )
-    outlet = sim.add_outlet(
-        gs.insert.Outlet(
-            gs.Box(lo=(-R - 2 * d, -R - 2 * d, -1.0), hi=(R + 2 * d, R + 2 * d, -1.5 * d)),
-            every=case.outlet_every,
-        )
-    )
+    R = 0.5 * silo
+    sim = gs.scaling.build_simulation(params, quiet=True)
+    stream, outlet = sim.streams[0], sim.outlets[0]
+    glass, size = params.insertions[0].material, params.insertions[0].radius
+    assert isinstance(size, gs.dist.Uniform)
     vtk = None
     if case.vtk_every is not None and output is not None:
         vtk = gs.io.VTK(output, every=case.vtk_every)
@@ -651,12 +717,12 @@ def run_orifice(
     )
 
     # ----- open: the shutter drops 4 d at shutter_speed, then stops inside the outlet region
-    sim.set_wall_motion(shutter, velocity=(0.0, 0.0, -case.shutter_speed))
+    sim.set_wall_motion(SHUTTER, velocity=(0.0, 0.0, -case.shutter_speed))
     clock.run(t_open + 4 * d / case.shutter_speed)
-    sim.set_wall_motion(shutter, velocity=(0.0, 0.0, 0.0))
+    sim.set_wall_motion(SHUTTER, velocity=(0.0, 0.0, 0.0))
     clogged = False
     last_mass, last_change = outlet.removed_mass, sim.time
-    refill = _Refill(case, seed, R - d_max, height, mass0 / n0, glass)
+    refill = _Refill(case, seed, size, R - 2 * size.max, height, mass0 / n0, glass)
     chunk = case.refill_every if case.constant_head else 0.05
     while True:
         elapsed = sim.time - t_open
@@ -722,6 +788,7 @@ def run_orifice(
         wall_clock=wall,
         particle_steps=clock.particle_steps,
         notes=notes,
+        cg=case.cg,
     )
     say(
         f"  D0 = {orifice * 1e3:g} mm, seed {seed}: W = {w:.4g} kg/s (R^2 = {r2:.4f}), "
@@ -1013,14 +1080,7 @@ def run_study(
     runs = run_many(tasks, jobs, verbose)
     wall = time.perf_counter() - t0
     for r in runs:
-        np.savetxt(
-            out / f"history_D{r.orifice * 1e3:g}_s{r.seed}.csv",
-            np.column_stack([r.time, r.mass, r.count]),
-            delimiter=",",
-            header="time_after_opening_s,discharged_mass_kg,discharged_count",
-            comments="",
-            fmt=["%.6f", "%.6e", "%d"],
-        )
+        save_history(out / f"history_D{r.orifice * 1e3:g}_s{r.seed}.csv", r)
     return _finish(case, orifices, seeds, runs, wall, out, jobs, verbose)
 
 
@@ -1072,29 +1132,45 @@ def _finish(
     return result
 
 
+def load_run(case: SiloCase, summary: dict[str, Any], history: Path) -> DischargeResult:
+    """A run of ``case`` from its results.json summary and its outlet history (CSV), with the
+    rate measured again from the history."""
+    h = np.loadtxt(history, delimiter=",", skiprows=1, ndmin=2)
+    names = {f.name for f in dataclasses.fields(DischargeResult)}
+    values: dict[str, Any] = {
+        k: math.nan if v is None else v for k, v in summary.items() if k in names
+    }
+    t, m = h[:, 0], h[:, 1]
+    w, w1, w2, r2 = rate_of(case, values["orifice"], t, m, float(values["inventory"]))
+    values.update(time=t, mass=m, count=h[:, 2].astype(np.int64))
+    values.update(rate=w, rate_first_half=w1, rate_second_half=w2, r_squared=r2)
+    return DischargeResult(**values)
+
+
+def save_history(path: Path, run: DischargeResult) -> None:
+    """Write the outlet history of a run (the CSV that load_run reads)."""
+    np.savetxt(
+        path,
+        np.column_stack([run.time, run.mass, run.count]),
+        delimiter=",",
+        header="time_after_opening_s,discharged_mass_kg,discharged_count",
+        comments="",
+        fmt=["%.6f", "%.6e", "%d"],
+    )
+
+
 def reanalyse(output: str | Path, verbose: bool = True) -> StudyResult:
     """Fit, plot and report again a finished study from its results.json and outlet histories
     (no simulation; e.g. after a change of the analysis)."""
     out = Path(output)
     data = json.loads((out / "results.json").read_text())
     case = SiloCase(**data["case"])
-    names = {f.name for f in dataclasses.fields(DischargeResult)}
-    runs = []
-    for summary in data["runs"]:
-        h = np.loadtxt(
-            out / f"history_D{summary['orifice'] * 1e3:g}_s{summary['seed']}.csv",
-            delimiter=",",
-            skiprows=1,
-            ndmin=2,
+    runs = [
+        load_run(
+            case, summary, out / f"history_D{summary['orifice'] * 1e3:g}_s{summary['seed']}.csv"
         )
-        values: dict[str, Any] = {
-            k: math.nan if v is None else v for k, v in summary.items() if k in names
-        }
-        t, m = h[:, 0], h[:, 1]
-        w, w1, w2, r2 = rate_of(case, values["orifice"], t, m, float(values["inventory"]))
-        values.update(time=t, mass=m, count=h[:, 2].astype(np.int64))
-        values.update(rate=w, rate_first_half=w1, rate_second_half=w2, r_squared=r2)
-        runs.append(DischargeResult(**values))
+        for summary in data["runs"]
+    ]
     runs.sort(key=lambda r: (r.orifice, r.seed))
     return _finish(
         case,
