@@ -331,7 +331,7 @@ def run_study(
             tasks += [(case, float(d0), int(s), None) for s in seeds]
     if jobs < 1:
         raise ValueError(f"silo_cg.jobs must be at least 1, got {jobs}")
-    say = sd._print if verbose else (lambda _s: None)
+    say = _print if verbose else (lambda _s: None)
     say(
         f"grainscale CG silo discharge (CASES D1 ii) against {reference.path}: "
         f"{len(tasks)} runs on {jobs} process(es); output in {out}"
@@ -375,8 +375,12 @@ def analyse(output: str | Path, reference: Reference, verbose: bool = True) -> d
     text = _report(reference, comparisons, fits, broken, runs, result["passed"])
     (out / "report.md").write_text(text)
     if verbose:
-        sd._print(text)
+        _print(text)
     return result
+
+
+def _print(line: str) -> None:
+    print(line, flush=True)
 
 
 def _clean(v: Any) -> Any:
