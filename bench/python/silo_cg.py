@@ -23,13 +23,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime as dt
-import json
 import os
-import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 from typing import Any
+
+from bench_common import write_results
 
 from grainscale.examples import silo_discharge as sd
 
@@ -127,17 +128,15 @@ def main() -> int:
             f"{s['particle_steps_per_s']:>9.3g} {s['speed_up']:>8.1f} {s['expected_h4']:>5.0f} "
             f"{s['particle_step_ratio']:>13.1f}"
         )
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    data = {
-        "date": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-        "host": platform.node(),
-        "cpus": os.cpu_count(),
+    entry = {
+        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
         "orifice_m": orifice,
         "case": dataclasses.asdict(sd.SiloCase()),
         "runs": rows,
         "summary": summary,
     }
-    args.output.write_text(json.dumps(data, indent=2) + "\n")
+    # one entry per orifice; entries of other orifices already in the file are kept
+    write_results(args.output, "silo_cg", {f"D{args.orifice:g}": entry}, {"argv": sys.argv})
     print(f"\nwritten {args.output}")
     return 0
 
