@@ -154,7 +154,7 @@ def save_run(directory: Path, case: sd.SiloCase, run: sd.DischargeResult) -> Non
     directory.mkdir(parents=True, exist_ok=True)
     name = run_name(run.cg, run.orifice, run.seed)
     data = {"case": dataclasses.asdict(case), "run": run.summary()}
-    (directory / f"{name}.json").write_text(json.dumps(_clean(data), indent=2) + "\n")
+    (directory / f"{name}.json").write_text(json.dumps(sd.json_ready(data), indent=2) + "\n")
     sd.save_history(directory / f"{name}.csv", run)
 
 
@@ -370,7 +370,7 @@ def analyse(output: str | Path, reference: Reference, verbose: bool = True) -> d
         "broken_similarities": {f"{h:g}": b for h, b in broken.items()},
         "runs": [dict(r.summary(), name=run_name(r.cg, r.orifice, r.seed)) for r in runs],
     }
-    (out / "results.json").write_text(json.dumps(_clean(result), indent=2) + "\n")
+    (out / "results.json").write_text(json.dumps(sd.json_ready(result), indent=2) + "\n")
     _plot(out / "ratio.png", reference, comparisons)
     text = _report(reference, comparisons, fits, broken, runs, result["passed"])
     (out / "report.md").write_text(text)
@@ -381,19 +381,6 @@ def analyse(output: str | Path, reference: Reference, verbose: bool = True) -> d
 
 def _print(line: str) -> None:
     print(line, flush=True)
-
-
-def _clean(v: Any) -> Any:
-    """JSON-ready: NaN/inf -> None, numpy scalars -> Python."""
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    if isinstance(v, dict):
-        return {k: _clean(x) for k, x in v.items()}
-    if isinstance(v, list | tuple):
-        return [_clean(x) for x in v]
-    if isinstance(v, np.floating | np.integer | np.bool_):
-        return _clean(v.item())
-    return v
 
 
 # ------------------------------------------------------------------------------------------

@@ -1184,18 +1184,20 @@ def reanalyse(output: str | Path, verbose: bool = True) -> StudyResult:
     )
 
 
-def _write_json(path: Path, r: StudyResult) -> None:
-    def clean(v: Any) -> Any:
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list | tuple):
-            return [clean(x) for x in v]
-        if isinstance(v, np.floating | np.integer):
-            return clean(v.item())
-        return v
+def json_ready(v: Any) -> Any:
+    """``v`` for json.dumps: NaN and inf -> None, numpy scalars -> Python, recursively."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, dict):
+        return {k: json_ready(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [json_ready(x) for x in v]
+    if isinstance(v, np.floating | np.integer | np.bool_):
+        return json_ready(v.item())
+    return v
 
+
+def _write_json(path: Path, r: StudyResult) -> None:
     data = {
         "case": dataclasses.asdict(r.case),
         "orifices_m": r.orifices,
@@ -1214,7 +1216,7 @@ def _write_json(path: Path, r: StudyResult) -> None:
         "wall_clock_s": r.wall_clock,
         "jobs": r.jobs,
     }
-    path.write_text(json.dumps(clean(data), indent=2) + "\n")
+    path.write_text(json.dumps(json_ready(data), indent=2) + "\n")
 
 
 def _plot(path: Path, r: StudyResult) -> None:
