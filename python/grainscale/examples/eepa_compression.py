@@ -47,10 +47,12 @@ TOLERANCE = 0.05  # agreement claimed by Thakur et al. 2016 and gated by CASES.m
 class Job:
     """One run: a size ratio h, whether it is the negative control (f0 not scaled), the packing
     seed, and a factor on the die diameter and fill height. ``geometry`` = 1/h with h = 1 is the
-    reference powder in the die shrunk to the die-to-particle ratio D/d of scale h, with gravity
-    x h so that the weight stress rho g H is that of the full die: with the same seed the
-    packing is then the coarse run's packing shrunk by h, which separates the contact-law
-    scaling from the D/d effect."""
+    reference powder in the die shrunk to the die-to-particle ratio D/d of scale h; gravity x h
+    keeps the weight stress rho g H, the Froude and the Bond number of the coarse run, and the
+    hold and rest times shrink with the lengths (at equal velocities the process time goes with
+    the length), so with the same seed it is the coarse run shrunk by h in every dimensionless
+    number (inertial number, dt / T included): it separates the contact-law scaling from the
+    D/d effect."""
 
     h: float
     control: bool = False
@@ -77,6 +79,8 @@ class Job:
             die_diameter=case.die_diameter * self.geometry,
             fill_height=case.fill_height * self.geometry,
             gravity=case.gravity / self.geometry,
+            hold_time=case.hold_time * self.geometry,
+            rest_time=case.rest_time * self.geometry,
         )
 
 
@@ -310,7 +314,7 @@ def report(
         f" resistance or cohesion to {case.preparation_stress:g} Pa (fast at"
         f" {case.preparation_speed * 1e3:g} mm/s up to solid fraction {case.fast_fraction:g},"
         f" then at {2 * case.platen_speed * 1e3:g} mm/s, then held at the stress for"
-        f" {eu.HOLD_TIME:g} s); then the full law and gravity, platen in place;",
+        f" {case.hold_time:g} s); then the full law and gravity, platen in place;",
         f"- reference radius {case.radius * 1e3:g} mm +/- {case.spread * 100:g} % (uniform),"
         f" density {case.density:g} kg/m^3, E = {case.youngs_modulus:g} Pa (reduced),"
         f" nu = {case.poisson_ratio:g}, e = {case.restitution:g};",

@@ -40,7 +40,6 @@ from grainscale.scaling import ParameterSet, Particles, Scaled, build_simulation
 
 BOTTOM, PLATEN, DIE = 0, 1, 2  # wall indices, in the order of ParameterSet.walls
 PREPARATIONS = ("compact", "pour")
-HOLD_TIME = 0.1  # s at the preparation stress before the law is switched on
 
 
 @dataclass(frozen=True)
@@ -81,6 +80,8 @@ class Case:
             ``fast_fraction`` (m/s); afterwards stress-controlled, at most 2 x ``platen_speed``.
         fast_fraction: whole-sample solid fraction up to which the compaction runs fast
             (below frictionless jamming, about 0.64, nothing resists the platen).
+        hold_time: time the compacted sample is held at the preparation stress (s).
+        rest_time: rest after the full law is switched on, and after the die is removed (s).
     """
 
     die_diameter: float = 0.04
@@ -106,6 +107,8 @@ class Case:
     preparation_stress: float = 200.0
     preparation_speed: float = 0.1
     fast_fraction: float = 0.45
+    hold_time: float = 0.1
+    rest_time: float = 0.02
 
     def __post_init__(self) -> None:
         for name in (
@@ -120,6 +123,8 @@ class Case:
             "gravity",
             "preparation_stress",
             "preparation_speed",
+            "hold_time",
+            "rest_time",
         ):
             v = float(getattr(self, name))
             if not (v > 0 and math.isfinite(v)):
@@ -331,7 +336,7 @@ def _compact(case: Case, params: ParameterSet, notes: list[str]) -> tuple[Partic
         sim.run(until=sim.time + (z - fast_height) / case.preparation_speed)
         sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
     # then at 2 x platen_speed until the stress reaches the target (part of it is the platen's
-    # contact damping), then held at the target stress for HOLD_TIME (the same process time at
+    # contact damping), then held at the target stress for hold_time (the same process time at
     # every scale). The servo gain keeps gain x (damping coefficients of the platen contacts)
     # well below 1: a higher gain makes the servo chatter on its own damping force.
     slow = 2 * case.platen_speed
@@ -346,12 +351,14 @@ def _compact(case: Case, params: ParameterSet, notes: list[str]) -> tuple[Partic
     )
     servo = gs.geometry.Servo(0.05 * slow / (target * case.area), slow, target_stress=target)
     sim.set_wall_servo(PLATEN, dataclasses.replace(servo, area=case.area))
-    sim.run(until=sim.time + HOLD_TIME - 0.01)
+    window = 0.1 * case.hold_time
+    sim.run(until=sim.time + case.hold_time - window)
     z0 = float(sim.wall_position(PLATEN)[2])
-    sim.run(until=sim.time + 0.01)
+    sim.run(until=sim.time + window)
     z1 = float(sim.wall_position(PLATEN)[2])
-    if abs(z1 - z0) > 1e-3 * z1:  # strain rate above 0.1 /s at the end of the hold
-        notes.append(f"compaction still creeping at {(z0 - z1) / z1 / 0.01:.2g} /s")
+    creep = (z0 - z1) / z1 / window
+    if abs(creep) > 0.1:  # strain rate above 0.1 /s at the end of the hold
+        notes.append(f"compaction still creeping at {creep:.2g} /s")
     sim.set_wall_servo(PLATEN, None)
     sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
     with sim.particles(writable=False) as p:
@@ -383,7 +390,7 @@ def run_test(
     sim = build_simulation(
         dataclasses.replace(params, insertions=(), particles=(prepared,)), quiet=True
     )
-    sim.run(until=sim.time + 0.02)  # the bed contracts a little as cohesion and gravity set in
+    sim.run(until=sim.time + case.rest_time)  # the bed contracts as cohesion and gravity set in
     if case.preparation == "pour":
         with sim.particles(writable=False) as p:
             top = float(np.max(p.position[:, 2] + p.radius))
@@ -397,7 +404,7 @@ def run_test(
     # lifted by the domain height: its lower end clears the sample and everything above it
     lift = params.domain.hi[2] - params.domain.lo[2]
     _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + lift)
-    sim.run(until=sim.time + 0.02)
+    sim.run(until=sim.time + case.rest_time)
     start = float(sim.wall_position(PLATEN)[2])
 
     def done(c: Curve) -> bool:
