@@ -3,7 +3,9 @@
 Strains are engineering strains of the platen travel. The confined loading strain is counted
 from the seating height, where the axial stress first reaches a small seating stress (as a
 laboratory test counts from a seating load): before it the platen only meets the few highest
-particles of a rough top surface, whose roughness grows with the particle size. The unconfined
+particles of a rough top surface (a poured sample) or closes the small gap a compacted sample
+opens as cohesion and gravity set in; both are properties of the boundary layer, not of the
+bulk, and grow with d/D. The strain from the start of the loading is measured too. The unconfined
 stress is corrected for the growing cross-section, sigma = F (1 - eps) / A0 (ASTM D2166); the
 unconfined strength is the maximum up to the strain cap (ASTM D2166 takes the stress at 15 %
 strain when there is no peak) of its running mean over STRENGTH_WINDOW.

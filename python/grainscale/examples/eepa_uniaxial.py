@@ -3,21 +3,26 @@
 Used by :mod:`grainscale.examples.eepa_compression` (validation/CASES.md E3, Thakur, Ooi &
 Ahmadian 2016, Powder Technol. 293:130). Stages:
 
-1. sample preparation from a loose random packing (volume fraction ``loose_fraction``), one of
-   - ``"compact"`` (default): the packing is compacted by the
-     top platen without gravity, friction, rolling resistance or cohesion until the axial
-     stress reaches a small preparation stress: a frictionless random packing jams near random
-     close packing whatever the particle size, and neither gravity (the Froude and Bond numbers
-     the cg scheme does not keep) nor pouring enters; the top surface is flat (the platen);
-   - ``"pour"``: it settles under gravity with the cohesion switched off (the
-     first version of the study; the settled bed depends on the scale through the pouring);
+1. sample preparation from a loose random packing (volume fraction ``loose_fraction``):
+
+   - ``"compact"`` (default): compacted by the top platen without gravity, friction, rolling
+     resistance or cohesion until it carries a small preparation stress, and held there; a
+     frictionless packing jams near random close packing whatever the particle size, and
+     neither gravity (the Froude and Bond numbers the cg scheme does not keep) nor pouring
+     enters; the top surface is flat (the platen). The whole-sample solid fraction then
+     depends only on the die-to-particle ratio D/d (the looser layer along the walls);
+   - ``"pour"``: settled under gravity with the cohesion switched off (the first version of
+     the study, with ``loose_fraction`` 0.35; the settled bed depends on the scale through the
+     pouring);
+
    the particles are then handed to a simulation with the full law and gravity, so every
    contact starts on its virgin loading branch;
 2. confined compression by the top platen to the pre-consolidation stress, then unloading to zero
    axial stress;
 3. the die is lifted clear of the sample in one step (its contacts vanish at once, as if it were
    removed) and the sample rests briefly;
-4. unconfined compression to failure: the peak axial stress is the unconfined strength.
+4. unconfined compression to failure (see :mod:`grainscale.examples.eepa_analysis` for the
+   strength).
 
 The parameters of a scale come only from :func:`grainscale.scaling.scale` applied to the
 reference set :func:`reference_parameters`; the negative control replaces the scaled pull-off
