@@ -242,7 +242,7 @@ class RunResult:
     time_step: float
     mean_radius: float
     solid_volume: float
-    settled_height: float
+    settled_height: float  # top of the prepared sample (m; the platen for "compact")
     core_solid_fraction: float
     loading: Curve
     unloading: Curve
