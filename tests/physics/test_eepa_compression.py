@@ -1,23 +1,23 @@
 """EEPA coarse graining in uniaxial compression (validation/CASES.md E3), reduced.
 
 The full study is ``python -m grainscale.examples.eepa_compression`` (40 mm die, h = 1, 1.5, 2,
-report in docs/studies/eepa_compression/). Here: a 24 mm die filled about 24 mm high, the
-reference powder (d = 2 mm, about 1300 particles) against the cg-scaled powder at h = 2 (about
-170 particles, D/d = 6) and the negative control at h = 2 with f0 left at its reference value;
-unconfined compression up to 8 % strain. Run side by side in two processes.
+three seeds each, report in docs/studies/eepa_compression/). Here, one seed, in one process: the
+cg-scaled powder at h = 2 (d = 4 mm, about 670 particles) in the 40 mm die against the reference
+powder (d = 2 mm) in a 20 mm die with gravity x 2 and hold/rest times / 2, i.e. the same
+die-to-particle ratio D/d = 10 and the same weight stress, Froude, Bond and inertial numbers,
+and the same packing seed: the coarse run is then the reference run magnified by h in every
+dimensionless number, and it differs only if the cg scheme scales a contact parameter wrongly
+(k1, k2, k_t ~ h, k_adh ~ h, f0 ~ h^2, rolling stiffness ~ h^3, time step ~ h). The die-to-
+particle ratio, the dominant difference between scales in one die, is taken out (see the study).
 
-Honest scope: this reduced set-up does not reach the 5 % agreement of Thakur et al. When the test
-was written the coarse powder differed from the reference by 9 % (L1) on the confined loading
-curve, -41 % on the unloading stiffness and -31 % on the unconfined strength; the control with f0
-left unscaled by -70 % on the strength. (The full study, D/d >= 10, is closer on the strength,
--4.5 % at h = 1.5 and -11 % at h = 2, but its loading curves differ by 44-53 % L1, mostly a strain
-offset gathered at low stress: see docs/studies/eepa_compression/report.md.) The gates on the
-scaled powder are therefore set about 1.3 x above the numbers measured, to catch a regression,
-and the decisive check is the negative control: with f0 unscaled the strength must be at least
-twice as far from the reference as with f0 ~ h^2 (the loading curve barely depends on f0 in the
-full study, so the control is judged on the strength only). The unloading stiffness is reported,
-not gated. Also: quasi-static loading (inertial number below 1e-3 at sigma_pre), the broken
-similarity numbers, and the measuring helpers on synthetic curves.
+Measured when the test was written: the confined loading curves and the unloading stiffness
+agree to round-off (L1 0.0000, E_unl 3.2039 MPa both); the unconfined flow amplifies round-off
+chaotically, and the strengths differ by 8 % (4 % up to 15 % strain in the study), of the order
+of the seed scatter (standard deviation 5 % over three seeds at h = 2). So the confined gates
+are the 5 % of Thakur et al. and the strength gate is 15 % (3 x that scatter). The negative
+control (f0 not scaled) misses the strength by 73 % and must miss it by more than 50 %. Also:
+quasi-static loading (inertial number below 1e-3 at sigma_pre), the broken similarity numbers,
+and the measuring helpers on synthetic curves.
 """
 
 from __future__ import annotations
@@ -28,39 +28,65 @@ import pytest
 from grainscale.examples import eepa_analysis as ea
 from grainscale.examples import eepa_compression as ec
 from grainscale.examples import eepa_uniaxial as eu
+from grainscale.scaling import build_simulation
 
-CASE = eu.Case(die_diameter=0.024, fill_height=0.036)
+CASE = eu.Case()  # the study's 40 mm die, for the coarse run (h = 2)
+JOBS = [ec.Job(1.0, geometry=0.5), ec.Job(2.0), ec.Job(2.0, control=True)]
 UNCONFINED_STRAIN = 0.08
-CURVE_GATE = 0.12  # L1-relative difference of sigma(eps), scaled powder
-STRENGTH_GATE = 0.4  # relative difference of sigma_c, scaled powder
-CONTROL_FACTOR = 2.0  # the control is at least this many times further off
+CURVE_GATE = ec.TOLERANCE  # L1-relative difference of the loading curves (Thakur et al.)
+STIFFNESS_GATE = ec.TOLERANCE  # relative difference of the unloading stiffness
+STRENGTH_GATE = 0.15  # relative difference of sigma_c: 3 x the seed scatter at h = 2
+CONTROL_GATE = 0.5  # the control's strength is at least this much below the reference's
 
 
 @pytest.fixture(scope="module")
 def rows() -> list[dict]:
-    jobs = [ec.Job(1.0), ec.Job(2.0), ec.Job(2.0, control=True)]
-    runs = ec.run_jobs(CASE, jobs, workers=2, max_unconfined_strain=UNCONFINED_STRAIN)
-    metrics = [ec.metrics_of(CASE, r) for r in runs]
-    return ec.compare(CASE, runs, metrics)
+    runs = ec.run_cached(CASE, JOBS, cache=None, max_unconfined_strain=UNCONFINED_STRAIN)
+    out = []
+    levels = ec.stress_levels(CASE)
+    for job, run in zip(JOBS, runs, strict=True):
+        m = ec.metrics_of(job.case(CASE), run)
+        row = ec.run_row(CASE, job, run, m)
+        row["curve"] = ea.strain_at_stress(m.loading_strain, m.loading_stress, levels)
+        out.append(row)
+    return out
+
+
+def test_packings_are_similar() -> None:
+    # the same seed in a die magnified by h gives the reference packing magnified by h
+    a = build_simulation(eu.scaled_parameters(JOBS[0].case(CASE), 1.0).params, quiet=True)
+    b = build_simulation(eu.scaled_parameters(CASE, 2.0).params, quiet=True)
+    with a.particles(writable=False) as p, b.particles(writable=False) as q:
+        assert len(p.radius) == len(q.radius) > 100
+        np.testing.assert_allclose(2 * p.radius, q.radius, rtol=1e-12)
+        np.testing.assert_allclose(2 * p.position, q.position, rtol=0, atol=1e-12)
 
 
 def test_scaled_confined_loading_agrees(rows: list[dict]) -> None:
     ref, coarse, _ = rows
-    assert coarse["particles"] < ref["particles"] / 5
-    assert coarse["loading_l1"] <= CURVE_GATE, coarse["loading_l1"]
+    assert ref["die_to_particle"] == pytest.approx(coarse["die_to_particle"], rel=0.02)
+    levels = ec.stress_levels(CASE)
+    l1 = ea.l1_relative(ref["curve"], levels, coarse["curve"], levels)
+    assert l1 <= CURVE_GATE, l1
+
+
+def test_scaled_unloading_stiffness_agrees(rows: list[dict]) -> None:
+    ref, coarse, _ = rows
+    d = ea.relative_difference(coarse["unloading_stiffness"], ref["unloading_stiffness"])
+    assert abs(d) <= STIFFNESS_GATE, d
 
 
 def test_scaled_unconfined_strength_agrees(rows: list[dict]) -> None:
     ref, coarse, _ = rows
     assert ref["strength"] > 0.1 * CASE.pre_stress  # cohesion gives a real strength
-    assert abs(coarse["strength_difference"]) <= STRENGTH_GATE, coarse["strength_difference"]
+    d = ea.relative_difference(coarse["strength"], ref["strength"])
+    assert abs(d) <= STRENGTH_GATE, d
 
 
 def test_unscaled_pull_off_force_breaks_agreement(rows: list[dict]) -> None:
-    _, coarse, control = rows
-    gap = abs(control["strength_difference"])
-    assert gap >= CONTROL_FACTOR * abs(coarse["strength_difference"]), gap
-    assert control["strength"] < 0.5 * coarse["strength"]
+    ref, _, control = rows
+    d = ea.relative_difference(control["strength"], ref["strength"])
+    assert d < -CONTROL_GATE, d
 
 
 def test_loading_is_quasi_static(rows: list[dict]) -> None:
@@ -83,6 +109,13 @@ def test_l1_relative_on_shifted_curve() -> None:
     assert ea.l1_relative(x, x, x[::10], 2 * x[::10]) == pytest.approx(1.0)
 
 
+def test_strain_at_stress_uses_the_running_maximum() -> None:
+    eps = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
+    sigma = np.array([0.0, 2.0, 1.0, 2.0, 4.0])  # a dip: the level 1.5 is first met at 0.075
+    out = ea.strain_at_stress(eps, sigma, [1.0, 1.5, 3.0])
+    assert out.tolist() == pytest.approx([0.05, 0.075, 0.25])
+
+
 def test_secant_unloading_of_a_line() -> None:
     # sigma = 1e4 - 2e6 * strain while the platen rises 1 um per record, H = 0.04 m
     z = 0.03 + 1e-6 * np.arange(100)
@@ -103,3 +136,15 @@ def test_bad_case_names_the_parameter() -> None:
         eu.Case(pull_off_force=0.1)
     with pytest.raises(ValueError, match=r"Case\.platen_speed must be positive"):
         eu.Case(platen_speed=0.0)
+    with pytest.raises(ValueError, match=r"Case\.preparation must be one of .*got 'shake'"):
+        eu.Case(preparation="shake")
+    with pytest.raises(ValueError, match=r"Case\.fast_fraction must lie between"):
+        eu.Case(fast_fraction=0.7)
+
+
+def test_job_scales_the_die() -> None:
+    job = ec.Job(1.0, seed=2, geometry=0.5)
+    c = job.case(CASE)
+    assert (c.die_diameter, c.fill_height, c.seed) == pytest.approx((0.02, 0.03, 2))
+    assert c.gravity == pytest.approx(2 * CASE.gravity)
+    assert job.group == "h=1 D x0.5" and job.label == "h=1 D x0.5 seed 2"

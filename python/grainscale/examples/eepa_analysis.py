@@ -3,8 +3,12 @@
 Strains are engineering strains of the platen travel. The confined loading strain is counted
 from the seating height, where the axial stress first reaches a small seating stress (as a
 laboratory test counts from a seating load): before it the platen only meets the few highest
-particles of a rough top surface, whose roughness grows with the particle size. The unconfined
-stress is corrected for the growing cross-section, sigma = F (1 - eps) / A0 (ASTM D2166).
+particles of a rough top surface (a poured sample) or closes the small gap a compacted sample
+opens as cohesion and gravity set in; both are properties of the boundary layer, not of the
+bulk, and grow with d/D. The strain from the start of the loading is measured too. The unconfined
+stress is corrected for the growing cross-section, sigma = F (1 - eps) / A0 (ASTM D2166); the
+unconfined strength is the maximum up to the strain cap (ASTM D2166 takes the stress at 15 %
+strain when there is no peak) of its running mean over STRENGTH_WINDOW.
 """
 
 from __future__ import annotations
@@ -18,6 +22,10 @@ import numpy as np
 SEATING_FRACTION = 0.02  # seating stress / sigma_pre
 LOADING_BIN = 0.002  # strain bin of the loading curve
 UNCONFINED_BIN = 0.005  # strain bin over which the unconfined stress is averaged
+# Window (strain) of the running mean whose maximum is the strength: the platen force of a
+# plastically flowing sample fluctuates by particle-scale rearrangements whose amplitude grows
+# with d/D, so the maximum of 0.005 bins is biased upwards the more, the coarser the particles.
+STRENGTH_WINDOW = 0.02
 UNLOADING_FRACTION = 0.25  # secant over the first 25 % of the stress drop (CASES.md E3)
 
 
@@ -28,13 +36,16 @@ class Metrics:
     seating_height: float  # m
     loading_strain: list[float]  # bin centres
     loading_stress: list[float]  # Pa, bin means
+    start_strain: list[float]  # loading strain from the height where the loading started
+    start_stress: list[float]  # Pa, bin means on start_strain
     pre_strain: float  # strain at sigma_pre
     unloading_stiffness: float  # Pa, secant
     unconfined_strain: list[float]
     unconfined_stress: list[float]  # Pa, area-corrected bin means
-    strength: float  # Pa, sigma_c
-    strength_strain: float  # strain at sigma_c
-    peaked: bool  # the stress fell clearly after sigma_c (else the ASTM 15 % cap decided)
+    strength: float  # Pa, sigma_c: maximum of the STRENGTH_WINDOW running mean
+    strength_strain: float  # strain at sigma_c (centre of the window)
+    strength_bin: float  # Pa, maximum of the UNCONFINED_BIN means (first version of the study)
+    peaked: bool  # the windowed stress fell clearly after sigma_c (else: a plateau, ASTM cap)
 
 
 def binned(x: np.ndarray, y: np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray]:
@@ -92,6 +103,7 @@ def measure(
     h_seat = float(hl[k])
     eps = (h_seat - hl[k:]) / h_seat
     e_bins, s_bins = binned(eps, sl[k:], LOADING_BIN)
+    e0_bins, s0_bins = binned((hl[0] - hl) / hl[0], sl, LOADING_BIN)
     # running mean over 5 records (0.01 % strain) against the platen-force noise
     smooth = np.ones(5) / 5
     stiffness = secant_unloading(
@@ -103,17 +115,23 @@ def measure(
     eps_u = (unconfined_start - hu) / unconfined_start
     u_bins, c_bins = binned(eps_u, su * (1 - eps_u), UNCONFINED_BIN)
     j = int(np.argmax(c_bins))
-    peaked = bool(np.any(c_bins[j:] < 0.8 * c_bins[j]))
+    w = max(1, round(STRENGTH_WINDOW / UNCONFINED_BIN))
+    window = np.convolve(c_bins, np.ones(w) / w, mode="valid") if len(c_bins) >= w else c_bins
+    jw = int(np.argmax(window))
+    peaked = bool(np.any(window[jw:] < 0.8 * window[jw]))
     return Metrics(
         seating_height=h_seat,
         loading_strain=e_bins.tolist(),
         loading_stress=s_bins.tolist(),
+        start_strain=e0_bins.tolist(),
+        start_stress=s0_bins.tolist(),
         pre_strain=float(eps[-1]),
         unloading_stiffness=stiffness,
         unconfined_strain=u_bins.tolist(),
         unconfined_stress=c_bins.tolist(),
-        strength=float(c_bins[j]),
-        strength_strain=float(u_bins[j]),
+        strength=float(window[jw]),
+        strength_strain=float(np.mean(u_bins[jw : jw + w])),
+        strength_bin=float(c_bins[j]),
         peaked=peaked,
     )
 
@@ -140,3 +158,15 @@ def inertial_number(strain_rate: float, diameter: float, density: float, stress:
     """I = eps_dot d sqrt(rho / p) (GDR MiDi 2004, Eur. Phys. J. E 14:341); quasi-static for
     I below about 1e-3."""
     return strain_rate * diameter * math.sqrt(density / stress)
+
+
+def strain_at_stress(
+    strain: Sequence[float], stress: Sequence[float], levels: Sequence[float]
+) -> np.ndarray:
+    """Strain at which a loading curve first reaches each stress level (the curve's running
+    maximum, interpolated), so that curves of several seeds can be averaged at equal stress."""
+    s = np.maximum.accumulate(np.asarray(stress, dtype=float))
+    e = np.asarray(strain, dtype=float)
+    # on a flat stretch of the running maximum keep its first strain
+    keep = np.concatenate(([True], np.diff(s) > 0))
+    return np.interp(levels, s[keep], e[keep])

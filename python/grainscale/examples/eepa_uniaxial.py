@@ -1,17 +1,28 @@
 """One uniaxial test of an EEPA powder in a cylindrical die, at one particle scale.
 
 Used by :mod:`grainscale.examples.eepa_compression` (validation/CASES.md E3, Thakur, Ooi &
-Ahmadian 2016, Powder Technol. 293:130). Stages, all at one platen speed:
+Ahmadian 2016, Powder Technol. 293:130). Stages:
 
-1. fill: a loose random packing (volume fraction 0.35) in the die settles under gravity with the
-   cohesion switched off (f0 = k_adh = 0; cheaper than settling a cohesive bed, which stays near
-   the random-packing fraction); the settled particles are then handed to a simulation with the
-   full law, so every contact starts on its virgin loading branch;
+1. sample preparation from a loose random packing (volume fraction ``loose_fraction``):
+
+   - ``"compact"`` (default): compacted by the top platen without gravity, friction, rolling
+     resistance or cohesion until it carries a small preparation stress, and held there; a
+     frictionless packing jams near random close packing whatever the particle size, and
+     neither gravity (the Froude and Bond numbers the cg scheme does not keep) nor pouring
+     enters; the top surface is flat (the platen). The whole-sample solid fraction then
+     depends only on the die-to-particle ratio D/d (the looser layer along the walls);
+   - ``"pour"``: settled under gravity with the cohesion switched off (the first version of
+     the study, with ``loose_fraction`` 0.35; the settled bed depends on the scale through the
+     pouring);
+
+   the particles are then handed to a simulation with the full law and gravity, so every
+   contact starts on its virgin loading branch;
 2. confined compression by the top platen to the pre-consolidation stress, then unloading to zero
    axial stress;
 3. the die is lifted clear of the sample in one step (its contacts vanish at once, as if it were
    removed) and the sample rests briefly;
-4. unconfined compression to failure: the peak axial stress is the unconfined strength.
+4. unconfined compression to failure (see :mod:`grainscale.examples.eepa_analysis` for the
+   strength).
 
 The parameters of a scale come only from :func:`grainscale.scaling.scale` applied to the
 reference set :func:`reference_parameters`; the negative control replaces the scaled pull-off
@@ -33,6 +44,7 @@ import grainscale as gs
 from grainscale.scaling import ParameterSet, Particles, Scaled, build_simulation, scale
 
 BOTTOM, PLATEN, DIE = 0, 1, 2  # wall indices, in the order of ParameterSet.walls
+PREPARATIONS = ("compact", "pour")
 
 
 @dataclass(frozen=True)
@@ -64,6 +76,17 @@ class Case:
         steps_per_contact: time step = shortest contact duration / this (stiffest contact: the
             unloading slope k2 of the smallest sphere on a rigid wall).
         seed: packing seed.
+        gravity: m/s^2 (downwards, during the test; the compaction runs without it).
+        loose_fraction: volume fraction of the random packing both preparations start from
+            (random sequential addition in a die of D/d = 10 jams near 0.33).
+        preparation: ``"compact"`` or ``"pour"`` (see the module docstring).
+        preparation_stress: axial stress that ends the compaction (Pa, ``"compact"``).
+        preparation_speed: platen speed of the compaction while the sample is looser than
+            ``fast_fraction`` (m/s); afterwards stress-controlled, at most 2 x ``platen_speed``.
+        fast_fraction: whole-sample solid fraction up to which the compaction runs fast
+            (below frictionless jamming, about 0.64, nothing resists the platen).
+        hold_time: time the compacted sample is held at the preparation stress (s).
+        rest_time: rest after the full law is switched on, and after the die is removed (s).
     """
 
     die_diameter: float = 0.04
@@ -83,6 +106,14 @@ class Case:
     platen_speed: float = 0.01
     steps_per_contact: float = 10.0
     seed: int = 1
+    gravity: float = 9.81
+    loose_fraction: float = 0.3
+    preparation: str = "compact"
+    preparation_stress: float = 200.0
+    preparation_speed: float = 0.1
+    fast_fraction: float = 0.45
+    hold_time: float = 0.1
+    rest_time: float = 0.02
 
     def __post_init__(self) -> None:
         for name in (
@@ -94,12 +125,30 @@ class Case:
             "pre_stress",
             "platen_speed",
             "steps_per_contact",
+            "gravity",
+            "preparation_stress",
+            "preparation_speed",
+            "hold_time",
+            "rest_time",
         ):
             v = float(getattr(self, name))
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"Case.{name} must be positive and finite, got {v!r}")
         if not 0 <= self.spread < 1:
             raise ValueError(f"Case.spread must be in [0, 1), got {self.spread!r}")
+        if self.preparation not in PREPARATIONS:
+            raise ValueError(
+                f"Case.preparation must be one of {PREPARATIONS}, got {self.preparation!r}"
+            )
+        if not 0 < self.loose_fraction <= 0.35:
+            raise ValueError(
+                f"Case.loose_fraction must be in (0, 0.35], got {self.loose_fraction!r}"
+            )
+        if not self.loose_fraction < self.fast_fraction < 0.64:
+            raise ValueError(
+                "Case.fast_fraction must lie between loose_fraction and frictionless jamming"
+                f" (0.64), got {self.fast_fraction!r}"
+            )
         if self.pull_off_force > 0:
             raise ValueError(f"Case.pull_off_force must be <= 0 (N), got {self.pull_off_force!r}")
 
@@ -138,7 +187,7 @@ def reference_parameters(case: Case) -> ParameterSet:
     return ParameterSet(
         domain=gs.Box((-r_die - margin, -r_die - margin, -margin), (r_die + margin,) * 2 + (top,)),
         contact=law,
-        gravity=(0.0, 0.0, -9.81),
+        gravity=(0.0, 0.0, -case.gravity),
         time_step=dt,
         skin=0.4 * r_max,
         walls=(
@@ -152,7 +201,7 @@ def reference_parameters(case: Case) -> ParameterSet:
                 gs.geometry.Cylinder((0, 0, 0), (0, 0, 1), r_die, length=case.fill_height),
                 radius=size,
                 material=powder,
-                volume_fraction=0.35,
+                volume_fraction=case.loose_fraction,
                 seed=case.seed,
             ),
         ),
@@ -193,7 +242,7 @@ class RunResult:
     time_step: float
     mean_radius: float
     solid_volume: float
-    settled_height: float
+    settled_height: float  # top of the prepared sample (m; the platen for "compact")
     core_solid_fraction: float
     loading: Curve
     unloading: Curve
@@ -255,6 +304,75 @@ def _drive(
     sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
 
 
+def _pour(params: ParameterSet, notes: list[str]) -> tuple[Particles, float]:
+    """Settle the loose packing under gravity with the cohesion off; returns the settled
+    particles and the height of the bed's top (the highest sphere top)."""
+    law = params.contact
+    dry = dataclasses.replace(law, pull_off_force=0.0, adhesive_stiffness=0.0)
+    sim = build_simulation(dataclasses.replace(params, contact=dry), quiet=True)
+    if not _settle(sim, speed=0.02, limit=0.4):
+        notes.append("bed still moving after 0.4 s")
+    with sim.particles(writable=False) as p:
+        settled = Particles(np.array(p.position), np.array(p.radius), params.insertions[0].material)
+    return settled, float(np.max(settled.position[:, 2] + settled.radius))
+
+
+def _compact(case: Case, params: ParameterSet, notes: list[str]) -> tuple[Particles, float]:
+    """Compact the loose packing with the top platen, without gravity, friction, rolling
+    resistance or cohesion, until it carries ``case.preparation_stress``; returns the particles
+    (handed on at rest: the rattlers of a frictionless packing never stop) and the platen
+    height."""
+    frictionless = dataclasses.replace(
+        params.contact, friction=0.0, rolling=None, pull_off_force=0.0, adhesive_stiffness=0.0
+    )
+    sim = build_simulation(
+        dataclasses.replace(params, contact=frictionless, gravity=(0.0, 0.0, 0.0)), quiet=True
+    )
+    with sim.particles(writable=False) as p:
+        r = np.array(p.radius)
+        top = float(np.max(p.position[:, 2] + r))
+    solid = float(np.sum(4 / 3 * math.pi * r**3))
+    _move_wall_to(sim, PLATEN, top + 0.1 * float(r.max()))
+    # fast while the packing is looser than fast_fraction (nothing resists the platen there)
+    fast_height = solid / (case.area * case.fast_fraction)
+    z = float(sim.wall_position(PLATEN)[2])
+    if z > fast_height:
+        sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, -case.preparation_speed))
+        sim.run(until=sim.time + (z - fast_height) / case.preparation_speed)
+        sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
+    # then at 2 x platen_speed until the stress reaches the target (part of it is the platen's
+    # contact damping), then held at the target stress for hold_time (the same process time at
+    # every scale). The servo gain keeps gain x (damping coefficients of the platen contacts)
+    # well below 1: a higher gain makes the servo chatter on its own damping force.
+    slow = 2 * case.platen_speed
+    target = case.preparation_stress
+    _drive(
+        sim,
+        Curve(),
+        case.area,
+        -slow,
+        2e-5 * fast_height,
+        lambda c: float(np.mean(c.stress[-5:])) >= target,
+    )
+    servo = gs.geometry.Servo(0.05 * slow / (target * case.area), slow, target_stress=target)
+    sim.set_wall_servo(PLATEN, dataclasses.replace(servo, area=case.area))
+    window = 0.1 * case.hold_time
+    sim.run(until=sim.time + case.hold_time - window)
+    z0 = float(sim.wall_position(PLATEN)[2])
+    sim.run(until=sim.time + window)
+    z1 = float(sim.wall_position(PLATEN)[2])
+    creep = (z0 - z1) / z1 / window
+    if abs(creep) > 0.1:  # strain rate above 0.1 /s at the end of the hold
+        notes.append(f"compaction still creeping at {creep:.2g} /s")
+    sim.set_wall_servo(PLATEN, None)
+    sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
+    with sim.particles(writable=False) as p:
+        compacted = Particles(
+            np.array(p.position), np.array(p.radius), params.insertions[0].material
+        )
+    return compacted, float(sim.wall_position(PLATEN)[2])
+
+
 def run_test(
     case: Case, h: float, control: bool = False, max_unconfined_strain: float = 0.15
 ) -> RunResult:
@@ -262,22 +380,27 @@ def run_test(
     t_start = time.perf_counter()
     scaled = scaled_parameters(case, h, scale_pull_off=not control)
     params = scaled.params
-    law = params.contact
-    dry = dataclasses.replace(law, pull_off_force=0.0, adhesive_stiffness=0.0)
-    sim = build_simulation(dataclasses.replace(params, contact=dry), quiet=True)
-    notes = [] if _settle(sim, speed=0.02, limit=0.4) else ["bed still moving after 0.4 s"]
-    with sim.particles(writable=False) as p:
-        settled = Particles(np.array(p.position), np.array(p.radius), params.insertions[0].material)
-    core = core_solid_fraction(settled.position, settled.radius, case.die_diameter)
+    notes: list[str] = []
+    if case.preparation == "compact":
+        prepared, top = _compact(case, params, notes)
+        # the platen stays where the compaction left it
+        walls = list(params.walls)
+        walls[PLATEN] = gs.geometry.Plane((0, 0, top), (0, 0, -1))
+        params = dataclasses.replace(params, walls=tuple(walls))
+    else:
+        prepared, top = _pour(params, notes)
+    core = core_solid_fraction(prepared.position, prepared.radius, case.die_diameter)
+    r = prepared.radius
+    solid = float(np.sum(4 / 3 * math.pi * r**3))
     sim = build_simulation(
-        dataclasses.replace(params, insertions=(), particles=(settled,)), quiet=True
+        dataclasses.replace(params, insertions=(), particles=(prepared,)), quiet=True
     )
-    sim.run(until=sim.time + 0.02)  # the bed contracts a little as cohesion sets in
-    with sim.particles(writable=False) as p:
-        top = float(np.max(p.position[:, 2] + p.radius))
-    r = settled.radius
+    sim.run(until=sim.time + case.rest_time)  # the bed contracts as cohesion and gravity set in
+    if case.preparation == "pour":
+        with sim.particles(writable=False) as p:
+            top = float(np.max(p.position[:, 2] + p.radius))
+        _move_wall_to(sim, PLATEN, top + 0.1 * float(r.max()))
     area, speed = case.area, case.platen_speed
-    _move_wall_to(sim, PLATEN, top + 0.1 * float(r.max()))
     record = 2e-5 * top  # platen travel between records: 2e-5 strain
 
     loading, unloading, unconfined = Curve(), Curve(), Curve()
@@ -286,15 +409,21 @@ def run_test(
     # lifted by the domain height: its lower end clears the sample and everything above it
     lift = params.domain.hi[2] - params.domain.lo[2]
     _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + lift)
-    sim.run(until=sim.time + 0.02)
+    sim.run(until=sim.time + case.rest_time)
     start = float(sim.wall_position(PLATEN)[2])
 
-    def capped(c: Curve) -> bool:
-        # always to the cap (ASTM D2166 takes the strength at 15 % strain when there is no
-        # peak): every run is measured over the same strain range
-        return (start - c.height[-1]) / start >= max_unconfined_strain
+    def done(c: Curve) -> bool:
+        # to the cap (ASTM D2166 takes the strength at 15 % strain when there is no peak), or
+        # earlier once the stress has clearly fallen after a peak (running mean over 100
+        # records, 0.2 % strain, below 60 % of its maximum)
+        if (start - c.height[-1]) / start >= max_unconfined_strain:
+            return True
+        if len(c.stress) < 200 or len(c.stress) % 50:
+            return False
+        mean = np.convolve(c.stress, np.ones(100) / 100, mode="valid")
+        return bool(mean[-1] < 0.6 * mean.max())
 
-    _drive(sim, unconfined, area, -speed, record, capped)
+    _drive(sim, unconfined, area, -speed, record, done)
     if sim.lost_particles:
         notes.append(f"{sim.lost_particles} particles left the domain")
     return RunResult(
@@ -303,7 +432,7 @@ def run_test(
         particles=len(r),
         time_step=float(sim.time_step),
         mean_radius=float(r.mean()),
-        solid_volume=float(np.sum(4 / 3 * math.pi * r**3)),
+        solid_volume=solid,
         settled_height=top,
         core_solid_fraction=core,
         loading=loading,
