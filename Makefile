@@ -10,7 +10,10 @@ PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' \) 2>/dev/null) CMakeLists.txt pyproject.toml
 
-.PHONY: all system-deps venv install demo test test-cpp bench bench-cpp lint format clean
+.PHONY: all system-deps venv install demo test test-mpi test-cpp bench bench-cpp lint format clean
+
+# mpirun for the MPI tests and benchmarks: allowed as root (CI runs as root).
+MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun
 
 all: install
 
@@ -38,12 +41,19 @@ install: system-deps $(VENV)/.installed
 demo: install
 	$(PY) -m grainscale.examples.hopper_demo --output out/demo
 
-# Lint, the C++ unit tests, then the Python suite (unit, physics validation, demo).
+# Lint, the C++ unit tests (serial build), the Python suite (unit, physics validation, demo),
+# then the MPI tests on 2 ranks and on 3 (more ranks than cores).
 test: install lint test-cpp
 	$(PY) -m pytest -q tests
+	$(MAKE) --no-print-directory test-mpi
+
+# Every rank runs the same tests (tests/mpi); a hang would be killed by the timeout.
+test-mpi: install
+	timeout 900 $(MPIRUN) -np 2 $(PY) -m pytest -q -p no:cacheprovider --color=no tests/mpi
+	timeout 900 $(MPIRUN) -np 3 --oversubscribe $(PY) -m pytest -q -p no:cacheprovider --color=no tests/mpi
 
 test-cpp: install
-	$(VENV)/bin/cmake -S . -B build/cpp-tests -DGRAINSCALE_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+	$(VENV)/bin/cmake -S . -B build/cpp-tests -DGRAINSCALE_BUILD_TESTS=ON -DGRAINSCALE_WITH_MPI=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
 	$(VENV)/bin/cmake --build build/cpp-tests -j2
 	$(VENV)/bin/ctest --test-dir build/cpp-tests --output-on-failure
 

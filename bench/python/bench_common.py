@@ -81,7 +81,20 @@ def check_grainscale() -> None:
 def single_thread_env() -> dict[str, str]:
     env = dict(os.environ)
     env["OMP_NUM_THREADS"] = "1"
+    # mpirun as root (the development VM and CI run as root).
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
     return env
+
+
+def launcher(ranks: int) -> list[str]:
+    """Command prefix that starts ``ranks`` MPI processes (none for one: the plain process)."""
+    if ranks == 1:
+        return []
+    mpirun = shutil.which("mpirun")
+    if not mpirun:
+        raise BenchmarkError("mpirun not found (make install installs openmpi-bin)")
+    return [mpirun, "-np", str(ranks), "--oversubscribe", "--bind-to", "none"]
 
 
 def machine_info() -> dict[str, Any]:
@@ -128,13 +141,16 @@ def failure(code: str, rc: int, rundir: Path, *files: str) -> BenchmarkError:
     return BenchmarkError("\n".join(parts))
 
 
-def run_liggghts_log(exe: str, workdir: Path, script: str, log_name: str) -> dict[str, Any]:
-    """Run LIGGGHTS on ``workdir/script`` in a fresh sub-directory; return the parsed log with
-    ``text`` (the whole log), ``maxrss_kib``, ``cpu_seconds`` and ``loadavg_1min`` added."""
+def run_liggghts_log(
+    exe: str, workdir: Path, script: str, log_name: str, ranks: int = 1
+) -> dict[str, Any]:
+    """Run LIGGGHTS (on ``ranks`` MPI processes) on ``workdir/script`` in a fresh sub-directory;
+    return the parsed log with ``text`` (the whole log), ``maxrss_kib``, ``cpu_seconds`` and
+    ``loadavg_1min`` added."""
     rundir = Path(tempfile.mkdtemp(prefix="liggghts_", dir=workdir))
     try:
         load = os.getloadavg()[0]
-        cmd = [exe, "-in", f"../{script}", "-log", log_name]
+        cmd = [*launcher(ranks), exe, "-in", f"../{script}", "-log", log_name]
         rc, rss, cpu = run_measured(cmd, rundir, single_thread_env())
         if rc != 0:
             raise failure("liggghts", rc, rundir, log_name, "stdout.txt", "stderr.txt")
@@ -150,15 +166,15 @@ def run_liggghts_log(exe: str, workdir: Path, script: str, log_name: str) -> dic
 
 
 def run_grainscale_worker(
-    worker: Path, workdir: Path, options: Sequence[str]
+    worker: Path, workdir: Path, options: Sequence[str], ranks: int = 1
 ) -> tuple[dict[str, Any], int, float, list[str]]:
-    """Run a grainscale worker script (``--output result.json`` is appended) in a fresh
-    sub-directory; return (its result.json, peak RSS in KiB, 1-min load at the start, the
-    warning lines of its stderr)."""
+    """Run a grainscale worker script (``--output result.json`` is appended; on ``ranks`` MPI
+    processes) in a fresh sub-directory; return (its result.json, peak RSS in KiB, 1-min load at
+    the start, the warning lines of its stderr)."""
     rundir = Path(tempfile.mkdtemp(prefix="grainscale_", dir=workdir))
     try:
         load = os.getloadavg()[0]
-        cmd = [sys.executable, str(worker), *options, "--output", "result.json"]
+        cmd = [*launcher(ranks), sys.executable, str(worker), *options, "--output", "result.json"]
         rc, rss, _ = run_measured(cmd, rundir, single_thread_env())
         if rc != 0 or not (rundir / "result.json").exists():
             raise failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")

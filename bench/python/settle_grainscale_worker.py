@@ -3,7 +3,9 @@
 Running it alone keeps its peak memory (ru_maxrss) separate from the driver and from LIGGGHTS.
 It reads the case parameters (JSON) and the initial positions/velocities (.npz) written by the
 driver, builds the same case as the LIGGGHTS input (see settle_case.py), times only the
-``Simulation.run`` call and writes a JSON result file.
+``Simulation.run`` call and writes a JSON result file. Under ``mpirun -np N`` the simulation is
+decomposed over the N ranks (ranks synchronised before and after the timed call) and rank 0
+writes the result, with the particle and ghost counts of every rank.
 """
 
 from __future__ import annotations
@@ -44,19 +46,29 @@ def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
     ke_initial = float(sim.kinetic_energy())
     setup_seconds = time.perf_counter() - t_setup
 
+    if sim.comm is not None:
+        sim.comm.Barrier()
     t0 = time.perf_counter()
     sim.run(steps=case.steps, progress=False)
+    if sim.comm is not None:
+        sim.comm.Barrier()
     run_seconds = time.perf_counter() - t0
 
     ke_total = float(sim.kinetic_energy())
-    with sim.particles() as p:
-        mass = np.asarray(p.mass, dtype=np.float64)
-        vel = np.asarray(p.velocity, dtype=np.float64)
-        ke_trans = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", vel, vel)))
-        mean_z = float(np.mean(p.position[:, 2]))
-        n_final = int(p.id.shape[0])
+    final = sim.gather(("position", "velocity", "mass"))
+    mass, vel = final["mass"], final["velocity"]
+    ke_trans = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", vel, vel)))
+    mean_z = float(np.mean(final["position"][:, 2]))
+    n_final = int(final["id"].shape[0])
     thermo = {k: _plain(v) for k, v in sim.thermo().items()}
-    return {
+    ranks = {
+        "ranks": sim.ranks,
+        "particles_per_rank": sim.decomposition()["counts"],
+        "ghosts_per_rank": gather_all(sim, int(sim._level.num_ghosts)),
+        "halo_seconds_per_rank": gather_all(sim, float(sim._level.halo_seconds)),
+        "rebuilds": int(sim._level.rebuilds),
+    }
+    return ranks | {
         "version": getattr(gs, "__version__", "unknown"),
         "run_seconds": run_seconds,
         "setup_seconds": setup_seconds,
@@ -71,6 +83,11 @@ def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
         "thermo": thermo,
         "rss_before_sim_kib": rss_before_kib,
     }
+
+
+def gather_all(sim: Any, value: Any) -> list[Any]:
+    """``value`` of every rank, in rank order."""
+    return [value] if sim.comm is None else sim.comm.allgather(value)
 
 
 def load_state(state_file: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -131,8 +148,17 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     case = SettleCase(**json.loads(args.case.read_text()))
     result = run(case, args.state)
-    args.output.write_text(json.dumps(result, indent=1))
+    from grainscale.parallel import launched_ranks
+
+    if launched_ranks() == 1 or _rank() == 0:
+        args.output.write_text(json.dumps(result, indent=1))
     return 0
+
+
+def _rank() -> int:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD.Get_rank()
 
 
 if __name__ == "__main__":

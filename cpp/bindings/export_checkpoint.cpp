@@ -20,7 +20,7 @@ void export_checkpoint(py::module_& m) {
     for (const auto& [key, v] : s.texts) out[py::str("texts/" + key)] = py::str(v);
     return out;
   });
-  level.def("load_state", [](Level& l, const py::dict& d) {
+  auto to_state = [](const py::dict& d) {
     LevelState s;
     for (const auto& [k, v] : d) {
       const std::string key = py::cast<std::string>(k);
@@ -36,7 +36,13 @@ void export_checkpoint(py::module_& m) {
         s.texts[key.substr(6)] = py::cast<std::string>(v);
       }
     }
-    l.load_state(s);
+    return s;
+  };
+  level.def("load_state", [to_state](Level& l, const py::dict& d) { l.load_state(to_state(d)); });
+  level.def("load_redistributed", [to_state](Level& l, const py::list& parts) {
+    std::vector<LevelState> states;
+    for (const auto& d : parts) states.push_back(to_state(py::cast<py::dict>(d)));
+    l.load_redistributed(states);
   });
   level.def("signature", &Level::signature);
 }

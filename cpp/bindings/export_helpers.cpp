@@ -1,6 +1,7 @@
 #include <pybind11/pybind11.h>
 
 #include "integrate/time_step.hpp"
+#include "parallel/communicator.hpp"
 
 namespace py = pybind11;
 using namespace grainscale;
@@ -11,4 +12,5 @@ void export_helpers(py::module_& m) {
   m.def("hertz_contact_time", &hertz_contact_time, py::arg("effective_radius"),
         py::arg("effective_mass"), py::arg("effective_youngs"), py::arg("impact_velocity"));
   m.attr("max_rayleigh_fraction") = kMaxRayleighFraction;
+  m.def("with_mpi", &Communicator::mpi_available, "Whether the core was built with MPI.");
 }

@@ -2,6 +2,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+
 #include "bindings/mesh_arrays.hpp"
 #include "level/level.hpp"
 
@@ -61,11 +63,28 @@ void export_level(py::module_& m) {
   m.def("supported_contact_laws", &supported_contact_laws);
 
   py::class_<Level>(m, "Level")
-      .def(py::init(
-               [](std::array<Real, 3> lo, std::array<Real, 3> hi, std::array<bool, 3> periodic) {
-                 return Level(Domain(to_vec3(lo), to_vec3(hi), periodic));
-               }),
-           py::arg("lo"), py::arg("hi"), py::arg("periodic"))
+      .def(py::init([](std::array<Real, 3> lo, std::array<Real, 3> hi, std::array<bool, 3> periodic,
+                       std::optional<std::int64_t> comm) {
+             const Domain domain(to_vec3(lo), to_vec3(hi), periodic);
+             return Level(domain, comm ? Communicator::from_fortran_handle(*comm) : Communicator());
+           }),
+           py::arg("lo"), py::arg("hi"), py::arg("periodic"), py::arg("comm") = py::none())
+      .def_property_readonly("rank", [](Level& l) { return l.comm().rank(); })
+      .def_property_readonly("ranks", [](Level& l) { return l.comm().size(); })
+      .def("set_processor_grid", &Level::set_processor_grid, py::arg("grid"))
+      .def("decomposition",
+           [](Level& l) {
+             const Decomposition& d = l.decomposition();
+             py::dict out;
+             out["grid"] = d.grid;
+             out["coords"] = d.coords;
+             out["cuts"] = d.cuts;
+             return out;
+           })
+      .def("balance", &Level::balance, py::call_guard<py::gil_scoped_release>())
+      .def("set_auto_balance", &Level::set_auto_balance, py::arg("every"), py::arg("threshold"))
+      .def("rank_counts", &Level::rank_counts, py::call_guard<py::gil_scoped_release>())
+      .def("global_count", &Level::global_count, py::call_guard<py::gil_scoped_release>())
       .def(
           "add_material",
           [](Level& l, Real density, Real E, Real nu) { return l.add_material({density, E, nu}); },
@@ -220,6 +239,7 @@ void export_level(py::module_& m) {
       .def_property_readonly("lost_particles", &Level::lost_particles)
       .def_property_readonly("rebuilds", &Level::rebuilds)
       .def_property_readonly("rebuild_seconds", &Level::rebuild_seconds)
+      .def_property_readonly("halo_seconds", &Level::halo_seconds)
       .def("kinetic_energy", &Level::kinetic_energy)
       .def("smallest_rayleigh_time", &Level::smallest_rayleigh_time)
       .def("last_contact_count", [](Level& l) { return l.last_stats().contacts; })

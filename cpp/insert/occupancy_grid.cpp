@@ -5,37 +5,63 @@
 
 namespace grainscale {
 
-OccupancyGrid::OccupancyGrid(const Vec3& lo, const Vec3& hi, Real max_new_radius,
-                             const ParticleStore& ps, const Domain& domain) {
-  // Existing spheres matter if they reach within their radius of the box grown by the largest
-  // new radius; take the largest of those radii to size the cells.
-  const Index n = ps.n_owned();
-  Real r_old = 0;
-  for (Index i = 0; i < n; ++i) r_old = std::max(r_old, ps.radius[i]);
+namespace {
+
+// Calls visit(p) for every periodic image p of x (x itself included): positions may sit just
+// outside the box until the next rebuild wraps them, so shifts of -L, 0, +L cover all cases.
+template <class Visit>
+void for_images(const Vec3& x, const Domain& domain, Visit visit) {
+  Vec3 images[27];
+  int n = 1;
+  images[0] = x;
+  for (int a = 0; a < 3; ++a) {
+    if (!domain.periodic[a]) continue;
+    const Real len = domain.hi[a] - domain.lo[a];
+    const int m = n;
+    for (int k = 0; k < m; ++k)
+      for (Real s : {-len, len}) {
+        Vec3 p = images[k];
+        p[a] += s;
+        images[n++] = p;
+      }
+  }
+  for (int k = 0; k < n; ++k) visit(images[k]);
+}
+
+bool touches(const Vec3& p, Real r, const Vec3& box_lo, const Vec3& box_hi) {
+  return ((p.array() + r) >= box_lo.array()).all() && ((p.array() - r) <= box_hi.array()).all();
+}
+
+}  // namespace
+
+void OccupancyGrid::collect_nearby(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real r_old,
+                                   const ParticleStore& ps, const Domain& domain, SphereSet& out) {
   const Vec3 grow = Vec3::Constant(max_new_radius + r_old);
   const Vec3 box_lo = lo - grow, box_hi = hi + grow;
-  std::vector<Vec3> images;
-  for (Index i = 0; i < n; ++i) {
-    // Periodic images on every periodic axis (positions may sit just outside the box until the
-    // next rebuild wraps them, so shifts of -L, 0, +L cover all cases).
-    images.assign(1, ps.position[i]);
-    for (int a = 0; a < 3; ++a) {
-      if (!domain.periodic[a]) continue;
-      const Real len = domain.hi[a] - domain.lo[a];
-      const std::size_t m = images.size();
-      for (std::size_t k = 0; k < m; ++k)
-        for (Real s : {-len, len}) {
-          Vec3 p = images[k];
-          p[a] += s;
-          images.push_back(p);
-        }
-    }
-    const Real r = ps.radius[i];
-    for (const Vec3& p : images)
-      if (((p.array() + r) >= box_lo.array()).all() && ((p.array() - r) <= box_hi.array()).all()) {
+  for (Index i = 0; i < ps.n_owned(); ++i) {
+    bool near = false;
+    for_images(ps.position[i], domain,
+               [&](const Vec3& p) { near = near || touches(p, ps.radius[i], box_lo, box_hi); });
+    if (!near) continue;
+    out.x.push_back(ps.position[i]);
+    out.r.push_back(ps.radius[i]);
+  }
+}
+
+OccupancyGrid::OccupancyGrid(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real r_old,
+                             const SphereSet& present, const Domain& domain) {
+  // Existing spheres matter if they reach within their radius of the box grown by the largest
+  // new radius.
+  const Vec3 grow = Vec3::Constant(max_new_radius + r_old);
+  const Vec3 box_lo = lo - grow, box_hi = hi + grow;
+  for (std::size_t i = 0; i < present.x.size(); ++i) {
+    const Real r = present.r[i];
+    for_images(present.x[i], domain, [&](const Vec3& p) {
+      if (touches(p, r, box_lo, box_hi)) {
         x_.push_back(p);
         r_.push_back(r);
       }
+    });
   }
   Real r_max = max_new_radius;
   for (Real r : r_) r_max = std::max(r_max, r);

@@ -12,13 +12,25 @@
 
 namespace grainscale {
 
+// Spheres (centres, radii) already present near an insertion region.
+struct SphereSet {
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+};
+
 class OccupancyGrid {
  public:
-  // Covers [lo, hi]; `max_new_radius` is the largest radius that will be tested or added.
-  // The owned particles of `ps` (and, on periodic axes, their images) that can touch the box are
-  // added at once.
-  OccupancyGrid(const Vec3& lo, const Vec3& hi, Real max_new_radius, const ParticleStore& ps,
-                const Domain& domain);
+  // Covers [lo, hi]; `max_new_radius` is the largest radius that will be tested or added and
+  // `r_old` the largest radius of the spheres present (over all ranks). The spheres of `present`
+  // (and, on periodic axes, their images) that can touch the box are added at once.
+  OccupancyGrid(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real r_old,
+                const SphereSet& present, const Domain& domain);
+
+  // The owned particles of `ps` that (or whose periodic images) can touch [lo, hi] grown by
+  // max_new_radius + r_old, appended to `out`: what a rank contributes to the grid of an
+  // insertion region (the level gathers them from every rank).
+  static void collect_nearby(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real r_old,
+                             const ParticleStore& ps, const Domain& domain, SphereSet& out);
 
   void add(const Vec3& x, Real r);
   // Whether the sphere (x, r) overlaps a stored sphere (touching is allowed).

@@ -10,14 +10,30 @@
 #include "core/errors.hpp"
 #include "integrate/time_step.hpp"
 #include "integrate/velocity_verlet.hpp"
+#include "parallel/migration.hpp"
 #include "state/body_shape.hpp"
 
 namespace grainscale {
 
-Level::Level(const Domain& domain)
-    : domain_(domain), law_(make_contact_law("hertz", "none", ContactSettings{})) {}
+Level::Level(const Domain& domain, Communicator comm)
+    : domain_(domain),
+      law_(make_contact_law("hertz", "none", ContactSettings{})),
+      comm_(std::move(comm)) {}
 
 namespace {
+
+// Adds the wall-clock time of its scope to `total`.
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedTimer() {
+    total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 void validate(const Interaction& in) {
   if (!(in.restitution >= 0 && in.restitution <= 1))
@@ -114,7 +130,7 @@ void Level::set_time_step(Real dt, bool force) {
 
 void Level::set_dimension(int dimension) {
   if (dimension != 2 && dimension != 3) throw_invalid("Simulation.dimension", "2 or 3", dimension);
-  if (ps_.n_owned() > 0 || !streams_.empty())
+  if (next_id_ > 0 || !streams_.empty())
     throw_invalid("Simulation.dimension", "set before particles or streams are added", dimension);
   dimension_ = dimension;
 }
@@ -169,9 +185,24 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
   lists_valid_ = false;
   forces_valid_ = false;
   ps_.clear_ghosts();
-  ps_.reserve(ps_.n_owned() + n);
+  ghosts_.clear();
+  ensure_decomposition();
   const GlobalId first = next_id_;
+  std::vector<char> mine(n, 1);
+  Index kept = n;
+  if (comm_.parallel()) {
+    kept = 0;
+    for (Index k = 0; k < n; ++k) {
+      mine[k] = owns(Vec3(position[3 * k], position[3 * k + 1], position[3 * k + 2]));
+      kept += mine[k];
+    }
+  }
+  ps_.reserve(ps_.n_owned() + kept);
   for (Index k = 0; k < n; ++k) {
+    if (!mine[k]) {  // another rank's: its id is taken all the same
+      ++next_id_;
+      continue;
+    }
     const Real r = radius[k];
     const Real m = particle_mass(materials_[material[k]].density, r, dimension_);
     const Vec3 x(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
@@ -279,6 +310,8 @@ void Level::set_wall_servo(int index, const Servo& servo) {
       throw_invalid("Servo.target_force", "finite (N)", s.target_force);
   }
   walls_[index].servo = s;
+  any_servo_ = false;
+  for (const Wall& w : walls_) any_servo_ = any_servo_ || w.servo.enabled;
 }
 
 Real Level::kinetic_energy() const {
@@ -297,7 +330,7 @@ Real Level::smallest_rayleigh_time() const {
     const MaterialProperties& m = materials_[ps_.material[i]];
     t = std::min(t, rayleigh_time(ps_.radius[i], m.density, m.youngs_modulus, m.poisson_ratio));
   }
-  return -comm_.max(-t);
+  return comm_.min(t);
 }
 
 std::vector<std::array<GlobalId, 2>> Level::neighbor_pairs() const {
@@ -319,9 +352,10 @@ void Level::prepare() {
     wall_contacts_.history_stride = stride;
     law_prepared_ = true;
   }
+  ensure_decomposition();
   if (!(dt_ > 0)) throw_invalid("Simulation.time_step", "set to a positive value (s)", dt_);
   if (!(skin_ > 0)) throw_invalid("Simulation.skin", "set to a positive value (m)", skin_);
-  if (!force_dt_ && ps_.n_owned() > 0) {
+  if (!force_dt_ && comm_.any(ps_.n_owned() > 0)) {
     const Real t_r = smallest_rayleigh_time();
     if (dt_ > kMaxRayleighFraction * t_r) {
       std::ostringstream c;
@@ -337,7 +371,7 @@ void Level::prepare() {
 void Level::validate_periodic_lengths() const {
   Real r_max = 0;
   for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
-  const Real cutoff = 2 * r_max + skin_;
+  const Real cutoff = 2 * comm_.max(r_max) + skin_;
   for (int a = 0; a < 3; ++a)
     if (domain_.periodic[a] && domain_.length()[a] < 2 * cutoff) {
       std::ostringstream c;
@@ -363,48 +397,60 @@ void Level::save_histories() {
 
 void Level::rebuild() {
   const auto started = std::chrono::steady_clock::now();
-  for (Index i = 0; i < ps_.n_owned(); ++i)
+  std::string unstable;
+  for (Index i = 0; i < ps_.n_owned() && unstable.empty(); ++i)
     if (!ps_.position[i].allFinite() || !ps_.velocity[i].allFinite()) {
       std::ostringstream msg;
       msg << "particle " << ps_.id[i] << " has a non-finite position or velocity at step " << step_
           << ": the simulation is unstable (time step too large for the stiffness?)";
-      throw std::runtime_error(msg.str());
+      unstable = msg.str();
     }
+  comm_.raise_if_any(unstable);  // every rank raises, none waits in the exchanges below
   if (lists_valid_) save_histories();
   ps_.clear_ghosts();
+  ghosts_.clear();
   wrap_periodic(ps_, domain_);
+  drop_lost();
+  ensure_decomposition();
 
   Real r_max = 0, r_min = INFINITY;
   for (Index i = 0; i < ps_.n_owned(); ++i) {
     r_max = std::max(r_max, ps_.radius[i]);
     r_min = std::min(r_min, ps_.radius[i]);
   }
+  r_max = comm_.max(r_max);
+  r_min = comm_.min(r_min);
   const Real cutoff = 2 * r_max + skin_;
   const Real size_ratio = r_max / r_min;
+  if (comm_.parallel()) {
+    if (balance_every_ > 0 && step_ - balanced_at_step_ >= balance_every_) {
+      if (imbalance(rank_counts()) > balance_threshold_) balance_cuts(cutoff);
+      balanced_at_step_ = step_;
+    }
+    const Real narrowest = decomposition_.narrowest_slab();
+    if (!(narrowest >= cutoff)) {
+      std::ostringstream c;
+      c << "such that every subdomain is at least the ghost cut-off 2 r_max + skin = "
+        << shortest(cutoff) << " m wide (use fewer ranks along the narrow axis); narrowest slab";
+      throw_invalid("Simulation.processor_grid", c.str(), narrowest);
+    }
+    migrate(ps_, origin_, pair_carry_, wall_carry_, domain_, decomposition_, comm_);
+  }
 
-  // Spatial sort (owned particles in cell order, for cache locality in the force loop); particles
-  // that left the box along a non-periodic axis are dropped here and counted as lost.
+  // Spatial sort (owned particles in cell order, for cache locality in the force loop).
   grid_.build_for_pairs(ps_.position.data(), ps_.n_owned(), cutoff, size_ratio);
   std::vector<Index>& order = scratch_order_;
-  order.clear();
-  for (Index i : grid_.particles) {
-    bool inside = true;
-    for (int a = 0; a < 3; ++a)
-      inside = inside && (domain_.periodic[a] || domain_.inside(ps_.position[i], a));
-    if (inside) order.push_back(i);
-  }
-  const bool none_lost = static_cast<Index>(order.size()) == ps_.n_owned();
-  lost_ += ps_.n_owned() - static_cast<Index>(order.size());
+  order.assign(grid_.particles.begin(), grid_.particles.end());
   ps_.select_owned(order);
   std::vector<Index>& new_origin = scratch_index_;
   new_origin.resize(order.size());
   for (std::size_t k = 0; k < order.size(); ++k) new_origin[k] = origin_[order[k]];
   origin_.swap(new_origin);
 
-  ghosts_.build(ps_, domain_, cutoff);
-  // Without ghosts or lost particles the sorted particles fill the same cells in order: the grid
-  // only needs renumbering, not a second binning.
-  if (ps_.n_ghost() == 0 && none_lost)
+  ghosts_.build(ps_, domain_, decomposition_, comm_, cutoff);
+  // Without ghosts the sorted particles fill the same cells in order: the grid only needs
+  // renumbering, not a second binning.
+  if (ps_.n_ghost() == 0)
     grid_.renumber_sorted();
   else
     grid_.build_for_pairs(ps_.position.data(), ps_.n_local(), cutoff, size_ratio);
@@ -456,15 +502,30 @@ void Level::compute_forces(const Law& law) {
   }
   if constexpr (kStats) stats_.clear();
   accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
-  ghosts_.reverse(ps_);
+  {
+    const ScopedTimer timer(halo_seconds_);
+    ghosts_.reverse(ps_, comm_);
+  }
   accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, primitives_, wall_contacts_, dt_,
                                                stats_);
+  if (comm_.parallel()) {
+    const ScopedTimer timer(halo_seconds_);
+    // Servo walls move by the total load every step; other loads are read after a run.
+    if (kStats || any_servo_) reduce_wall_loads();
+    if constexpr (kStats) reduce_stats();
+  }
 }
 
 template <bool kPlanar, class Law>
 void Level::run_with(const Law& law, std::int64_t steps) {
-  if (!lists_valid_) rebuild();
-  if (!forces_valid_) compute_forces<Law, false, true, false>(law);
+  // Ranks agree first: one rank's particles changed from Python means every rank rebuilds.
+  // A set-up evaluation with valid lists first refreshes the ghosts: their velocities are those
+  // of the last force evaluation, not of the closing kick or of changes made from Python.
+  if (comm_.any(!lists_valid_))
+    rebuild();
+  else if (comm_.any(!forces_valid_))
+    ghosts_.forward(ps_, comm_);
+  if (comm_.any(!forces_valid_)) compute_forces<Law, false, true, false>(law);
   forces_valid_ = true;
   const Real half_skin = 0.5 * skin_;
   for (std::int64_t s = 0; s < steps; ++s) {
@@ -482,10 +543,20 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     apply_insertions_and_outlets();  // may add/remove particles: lists become invalid
     // Inserted particles start with zero force: then the owned forces are set again.
     const bool owned_reset = lists_valid_;
-    if (!lists_valid_ || !(std::sqrt(comm_.max(max_d2)) + wall_shift <= half_skin))
+    // One reduction decides for all ranks (a rank that inserted or removed particles counts as
+    // having moved infinitely far; NaN becomes infinity too).
+    const Real moved2 = lists_valid_ ? max_d2 : INFINITY;
+    Real moved2_all;
+    {
+      const ScopedTimer timer(halo_seconds_);
+      moved2_all = comm_.max(moved2);
+    }
+    if (!(std::sqrt(moved2_all) + wall_shift <= half_skin)) {
       rebuild();
-    else
-      ghosts_.forward(ps_);
+    } else {
+      const ScopedTimer timer(halo_seconds_);
+      ghosts_.forward(ps_, comm_);
+    }
     if (s + 1 == steps)
       compute_forces<Law, true, true, false>(law);
     else if (owned_reset)

@@ -1,6 +1,13 @@
 // Level: one complete DEM system — particles, neighbour lists with contact history, contact
 // law, walls, ghost exchange and time step. A simulation is one level; an MLCG hierarchy (later)
 // holds several. Python decides what runs and when; run(steps) executes whole steps in C++.
+//
+// Under MPI a level is decomposed over the ranks of its Communicator (level/level_parallel.cpp):
+// every rank runs the same calls (SPMD) with the same arguments, owns the particles of its
+// subdomain and holds ghosts of its neighbours'. Set-up is replicated (materials, law, walls,
+// inserters); insertion places the same particles on every rank and each keeps its own; results
+// that Python reads (energies, wall loads, outlet masses, counts) are reduced over the ranks.
+// Calls marked "collective" must be made on every rank.
 #pragma once
 
 #include <array>
@@ -20,6 +27,7 @@
 #include "neighbor/cell_grid.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "parallel/communicator.hpp"
+#include "parallel/decomposition.hpp"
 #include "parallel/ghost_exchange.hpp"
 #include "state/contact_history.hpp"
 #include "state/domain.hpp"
@@ -30,7 +38,7 @@ namespace grainscale {
 
 class Level {
  public:
-  explicit Level(const Domain& domain);
+  explicit Level(const Domain& domain, Communicator comm = Communicator());
 
   // --- configuration (validated; errors name the Python-visible parameter) ---
   int add_material(const MaterialProperties& props);
@@ -55,7 +63,8 @@ class Level {
   Real plane_z() const { return 0.5 * (domain_.lo[2] + domain_.hi[2]); }
 
   // Adds n particles (arrays of 3n / n values; velocity and angular velocity may be null).
-  // Returns the global id of the first one; the others follow consecutively.
+  // Returns the global id of the first one; the others follow consecutively. Under MPI every
+  // rank passes all n and keeps those in its subdomain.
   GlobalId add_particles(Index n, const Real* position, const Real* velocity,
                          const Real* angular_velocity, const Real* radius,
                          const std::int32_t* material);
@@ -67,7 +76,25 @@ class Level {
                        const Vec3& origin);
   void set_wall_servo(int index, const Servo& servo);
 
+  // --- parallel runs (level/level_parallel.cpp) ---
+  const Communicator& comm() const { return comm_; }
+  // Processor grid (px, py, pz) with px py pz = ranks; set before any particle exists.
+  // Default: chosen from the box shape (choose_processor_grid).
+  void set_processor_grid(const std::array<int, 3>& grid);
+  const Decomposition& decomposition();
+  // Collective. Moves the cuts so that the slabs hold equal particle counts (particles move at
+  // the next list build); returns the imbalance (largest rank count / mean) before and after.
+  std::pair<Real, Real> balance();
+  // Collective when set: at list builds at least `every` steps apart, balance() when the
+  // imbalance exceeds `threshold`. every = 0 switches it off.
+  void set_auto_balance(std::int64_t every, Real threshold);
+  // Collective: owned particles on every rank (in rank order), and their sum.
+  std::vector<std::int64_t> rank_counts() const;
+  std::int64_t global_count() const { return comm_.sum(static_cast<std::int64_t>(ps_.n_owned())); }
+  // --- end parallel runs ---
+
   // --- running ---
+  // Collective.
   void run(std::int64_t steps);
   // Tells the level that Python changed positions (needs a rebuild) or velocities (forces
   // are recomputed, without advancing contact histories, before the next step).
@@ -77,32 +104,42 @@ class Level {
   // --- checkpoint (level/level_state.cpp) ---
   // Everything needed to continue bit-identically; load_state needs the same set-up
   // (materials, law, walls, inserters), checked through signature().
+  // Collective. save_state is this rank's part; load_state takes the part of the same rank
+  // saved under the same number of ranks and continues bit-identically. load_redistributed
+  // takes every rank's part of a checkpoint written on any number of ranks and keeps what lies
+  // in this rank's subdomain (histories included); the continuation then differs from the
+  // uninterrupted run only by round-off (the lists are rebuilt for the new decomposition).
   LevelState save_state();
   void load_state(const LevelState& state);
+  void load_redistributed(const std::vector<LevelState>& states);
   std::string signature() const;
 
   // --- state and diagnostics ---
   ParticleStore& particles() { return ps_; }
   std::int64_t step() const { return step_; }
   Real time() const { return time_; }
-  std::int64_t lost_particles() const { return lost_; }
+  // Collective: particles that left through a closed side, over all ranks.
+  std::int64_t lost_particles() const { return comm_.sum(lost_); }
   std::int64_t rebuilds() const { return rebuilds_; }
   // Wall-clock seconds spent in neighbour-list rebuilds (sorting, ghosts, lists, histories).
   double rebuild_seconds() const { return rebuild_seconds_; }
+  // Wall-clock seconds spent in the per-step exchanges: ghost updates (forward and reverse) and
+  // the reductions of a step (bench/SCALING.md compares them with the halo model).
+  double halo_seconds() const { return halo_seconds_; }
   const ContactStats& last_stats() const { return stats_; }
   // Keep a record of every touching contact at the last step of each run() (diagnostics).
   void set_record_contacts(bool on) { stats_.record = on; }
   bool record_contacts() const { return stats_.record; }
-  Real kinetic_energy() const;
-  Real smallest_rayleigh_time() const;
-  // Pairs (global ids) of the current particle list, each unordered pair once.
+  Real kinetic_energy() const;          // collective
+  Real smallest_rayleigh_time() const;  // collective
+  // Pairs (global ids) of this rank's current particle list, each unordered pair once.
   std::vector<std::array<GlobalId, 2>> neighbor_pairs() const;
 
   // --- insertion and outlets (level/level_insert.cpp) ---
   // Packs particles into a region without overlaps, with each other and with the particles
   // present; returns the global id of the first and the count (ids are consecutive, largest
   // particle first). Throws std::runtime_error, inserting nothing, if the target is out of reach.
-  std::pair<GlobalId, Index> pack(const PackSpec& spec);
+  std::pair<GlobalId, Index> pack(const PackSpec& spec);  // collective
   // Registers a stream inserter / an outlet; both run inside run() (the per-step hook), so the
   // result does not depend on how Python chunks run(). Returns the index.
   int add_stream(const StreamSpec& spec);
@@ -110,9 +147,12 @@ class Level {
   std::vector<StreamInserter>& streams() { return streams_; }
   std::vector<Outlet>& outlets() { return outlets_; }
   // Deletes owned particles by index (order irrelevant, repeats ignored) keeping the contact
-  // histories of the survivors. remove_particles does it by global id and returns the count.
+  // histories of the survivors (the forces are then those of the step before: the per-step hook
+  // recomputes them). remove_particles (collective) does it by global id, every rank given the
+  // same ids, re-evaluates the forces before the next step if a removed particle touched a
+  // survivor, and returns the number removed over all ranks.
   void remove_owned(const std::vector<Index>& indices);
-  Index remove_particles(const std::vector<GlobalId>& ids);
+  std::int64_t remove_particles(const std::vector<GlobalId>& ids);
   // Smallest Rayleigh time (s) of the particles the streams may insert (inf without streams).
   Real smallest_insertion_rayleigh_time() const;
   // --- end insertion and outlets ---
@@ -125,10 +165,27 @@ class Level {
   void compute_forces(const Law& law);
   void prepare();
   void validate_periodic_lengths() const;
+  // --- parallel runs (level/level_parallel.cpp) ---
+  void ensure_decomposition();
+  bool owns(const Vec3& x) const { return decomposition_.owner(x, domain_) == comm_.rank(); }
+  // Drops owned particles outside the closed sides of the box (counted as lost).
+  void drop_lost();
+  // Cut positions for equal counts along every split axis, slabs at least `min_width` wide.
+  void balance_cuts(Real min_width);
+  Real imbalance(const std::vector<std::int64_t>& counts) const;
+  // Every rank's nearby spheres of an insertion box, on every rank (OccupancyGrid input).
+  SphereSet gather_nearby(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real& r_old) const;
+  // After a force evaluation: the wall loads (and the contact statistics) summed over the ranks.
+  void reduce_wall_loads();
+  void reduce_stats();
+  // --- end parallel runs ---
   std::vector<Interaction> interaction_table() const;
   void save_histories();
   void rebuild();
   void save_insertion_state(LevelState& state) const;
+  void check_signature(const LevelState& state) const;
+  void load_scalars(const LevelState& state, std::int64_t lost);
+  void load_walls(const LevelState& state);
   void load_insertion_state(const LevelState& state);
   // Insertion and outlets (level/level_insert.cpp): runs once per step after the drift;
   // adding or removing particles invalidates the lists, so the step rebuilds them.
@@ -158,6 +215,13 @@ class Level {
   CellGrid grid_;
   GhostExchange ghosts_;
   Communicator comm_;
+  Decomposition decomposition_;
+  std::array<int, 3> requested_grid_{0, 0, 0};  // 0: choose from the box shape
+  bool decomposed_ = false;
+  std::int64_t balance_every_ = 0;
+  Real balance_threshold_ = 1.1;
+  std::int64_t balanced_at_step_ = 0;
+  bool any_servo_ = false;
   std::vector<Vec3> x_at_build_;
   // Rebuild scratch kept between rebuilds: fresh large buffers would cost page faults each time.
   std::vector<Index> scratch_order_, scratch_index_;
@@ -172,6 +236,7 @@ class Level {
   std::int64_t lost_ = 0;
   std::int64_t rebuilds_ = 0;
   double rebuild_seconds_ = 0;
+  double halo_seconds_ = 0;
   bool lists_valid_ = false;
   bool forces_valid_ = false;
   bool law_prepared_ = false;

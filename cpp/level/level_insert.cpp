@@ -62,7 +62,10 @@ std::pair<GlobalId, Index> Level::pack(const PackSpec& spec) {
   if (radii.empty()) return {next_id_, 0};
   Vec3 lo, hi;
   s.region.bounds(lo, hi);
-  OccupancyGrid grid(lo, hi, radii.front(), ps_, domain_);
+  // Every rank places the same particles among all ranks' spheres; add_particles keeps its own.
+  Real r_old = 0;
+  const SphereSet present = gather_nearby(lo, hi, radii.front(), r_old);
+  OccupancyGrid grid(lo, hi, radii.front(), r_old, present, domain_);
   const WallClearance walls(walls_, lo, hi, radii.front());
   const Placement p = place_in_region(s, radii, grid, walls, rng);
 
@@ -142,21 +145,12 @@ void Level::remove_owned(const std::vector<Index>& indices) {
     drop[i] = 1;
   }
   if (indices.empty()) return;
-  // The stored forces stay exact unless a removed particle touched a survivor (forces are then
-  // re-evaluated before the next step). Unknown contacts (lists invalid): re-evaluate.
-  bool touched = !lists_valid_;
-  for (Index i = 0; i < n && !touched; ++i)
-    for (Index k = pairs_.first[i]; k < pairs_.first[i + 1]; ++k) {
-      const Index j = pairs_.partner[k];
-      const Index owner = j < n ? j : ps_.ghost_owner[j - n];
-      if (pairs_.touching[k] && drop[i] != drop[owner]) touched = true;
-    }
-  if (touched) forces_valid_ = false;
   // As in add_particles/rebuild: histories are keyed by global ids while the lists are valid,
   // and origin_ maps each survivor to the index it had then, so rebuild() restores them.
   if (lists_valid_) save_histories();
   lists_valid_ = false;
   ps_.clear_ghosts();
+  ghosts_.clear();
   std::vector<Index> order;
   order.reserve(n);
   for (Index i = 0; i < n; ++i)
@@ -167,13 +161,25 @@ void Level::remove_owned(const std::vector<Index>& indices) {
   origin_.swap(new_origin);
 }
 
-Index Level::remove_particles(const std::vector<GlobalId>& ids) {
+std::int64_t Level::remove_particles(const std::vector<GlobalId>& ids) {
   const std::unordered_set<GlobalId> wanted(ids.begin(), ids.end());
   std::vector<Index> indices;
   for (Index i = 0; i < ps_.n_owned(); ++i)
     if (wanted.count(ps_.id[i])) indices.push_back(i);
+  // The stored forces stay exact unless a removed particle touched a survivor (forces are then
+  // re-evaluated before the next step). Every pair is stored on one rank, and every rank knows
+  // all removed ids, so the ranks' verdicts combine to the serial one. Unknown contacts (lists
+  // invalid): re-evaluate.
+  bool touched = !lists_valid_ && !indices.empty();
+  for (Index i = 0; lists_valid_ && i < ps_.n_owned() && !touched; ++i) {
+    const bool gone = wanted.count(ps_.id[i]) > 0;
+    for (Index k = pairs_.first[i]; k < pairs_.first[i + 1]; ++k)
+      if (pairs_.touching[k] && gone != (wanted.count(ps_.id[pairs_.partner[k]]) > 0))
+        touched = true;
+  }
   remove_owned(indices);
-  return static_cast<Index>(indices.size());
+  if (comm_.any(touched)) forces_valid_ = false;
+  return comm_.sum(static_cast<std::int64_t>(indices.size()));
 }
 
 // Checkpoints: the complete mutable state of every stream (batch counter, masses, pending
@@ -212,6 +218,7 @@ void Level::apply_insertions_and_outlets() {
 void Level::apply_outlets() {
   std::vector<Index> gone;
   std::vector<char> taken;  // a particle inside two outlets is counted by the first
+  std::vector<Real> tally;  // count and mass per outlet due now, summed over the ranks
   for (Outlet& outlet : outlets_) {
     if (!outlet.due(step_)) continue;
     const Region& region = outlet.spec().region;
@@ -234,7 +241,17 @@ void Level::apply_outlets() {
       ++count;
       mass += ps_.mass[i];
     }
-    if (count > 0) outlet.record(time_, count, mass);
+    tally.push_back(static_cast<Real>(count));
+    tally.push_back(mass);
+  }
+  if (tally.empty()) return;  // no outlet due (the same on every rank: a function of the step)
+  comm_.sum_in_place(tally);
+  std::size_t k = 0;
+  for (Outlet& outlet : outlets_) {
+    if (!outlet.due(step_)) continue;
+    const auto count = static_cast<std::int64_t>(tally[2 * k]);
+    if (count > 0) outlet.record(time_, count, tally[2 * k + 1]);
+    ++k;
   }
   if (!gone.empty()) remove_owned(gone);
 }
@@ -247,7 +264,9 @@ void Level::run_streams() {
     if (!s.schedule(time_, tolerance)) continue;
     Vec3 lo, hi;
     s.slab().bounds(lo, hi);
-    OccupancyGrid grid(lo, hi, s.spec().radius.max_radius(), ps_, domain_);
+    Real r_old = 0;
+    const SphereSet present = gather_nearby(lo, hi, s.spec().radius.max_radius(), r_old);
+    OccupancyGrid grid(lo, hi, s.spec().radius.max_radius(), r_old, present, domain_);
     // The walls where they are now (they moved before this hook in the step).
     const WallClearance walls(walls_, lo, hi, s.spec().radius.max_radius());
     x.clear();

@@ -63,6 +63,66 @@ void get_list(const LevelState& s, const std::string& key, ContactList& l) {
                              "' does not match this contact law's history size");
 }
 
+// Ghost stages: per stage axis, dir, send_to, recv_from, recv_first, recv_count, n_send, then
+// the sent indices; the shifts separately.
+void put_ghost_stages(LevelState& s, const std::vector<GhostStage>& stages) {
+  auto& ints = s.ints["ghosts/stages"];
+  auto& shifts = s.reals["ghosts/shifts"];
+  ints.clear();
+  shifts.clear();
+  for (const GhostStage& g : stages) {
+    ints.insert(ints.end(), {g.axis, g.dir, g.send_to, g.recv_from, g.recv_first, g.recv_count,
+                             static_cast<std::int64_t>(g.send.size())});
+    ints.insert(ints.end(), g.send.begin(), g.send.end());
+    shifts.insert(shifts.end(), {g.shift[0], g.shift[1], g.shift[2]});
+  }
+}
+
+std::vector<GhostStage> get_ghost_stages(const LevelState& s, std::size_t n_owned,
+                                         std::size_t n_local) {
+  const auto& in = ints(s, "ghosts/stages");
+  const auto& shifts = reals(s, "ghosts/shifts");
+  std::vector<GhostStage> stages;
+  std::size_t k = 0;
+  std::size_t next_slot = n_owned;
+  while (k < in.size()) {
+    if (in.size() - k < 7) throw std::runtime_error("checkpoint ghost stages are corrupt");
+    GhostStage g;
+    g.axis = static_cast<int>(in[k]);
+    g.dir = static_cast<int>(in[k + 1]);
+    g.send_to = static_cast<int>(in[k + 2]);
+    g.recv_from = static_cast<int>(in[k + 3]);
+    g.recv_first = static_cast<Index>(in[k + 4]);
+    g.recv_count = static_cast<Index>(in[k + 5]);
+    const std::size_t n_send = static_cast<std::size_t>(in[k + 6]);
+    k += 7;
+    if (in.size() - k < n_send || g.axis < 0 || g.axis > 2 ||
+        static_cast<std::size_t>(g.recv_first) != next_slot || g.recv_count < 0)
+      throw std::runtime_error("checkpoint ghost stages are corrupt");
+    next_slot += g.recv_count;
+    for (std::size_t j = 0; j < n_send; ++j, ++k) {
+      if (in[k] < 0 || static_cast<std::size_t>(in[k]) >= n_local)
+        throw std::runtime_error("checkpoint ghost stage refers to a missing particle");
+      g.send.push_back(static_cast<Index>(in[k]));
+    }
+    const std::size_t t = stages.size();
+    if (shifts.size() < 3 * (t + 1))
+      throw std::runtime_error("checkpoint ghost shifts are corrupt");
+    g.shift = Vec3(shifts[3 * t], shifts[3 * t + 1], shifts[3 * t + 2]);
+    stages.push_back(std::move(g));
+  }
+  if (next_slot != n_local) throw std::runtime_error("checkpoint ghost stages are corrupt");
+  return stages;
+}
+
+// The decomposition a state was saved under: ranks, grid, this rank, and the cut positions.
+void put_decomposition(LevelState& s, const Decomposition& d, int ranks) {
+  s.ints["decomposition"] = {ranks, d.grid[0], d.grid[1], d.grid[2], d.rank};
+  auto& cuts = s.reals["decomposition/cuts"];
+  cuts.clear();
+  for (int a = 0; a < 3; ++a) cuts.insert(cuts.end(), d.cuts[a].begin(), d.cuts[a].end());
+}
+
 }  // namespace
 
 std::string Level::signature() const {
@@ -80,8 +140,12 @@ LevelState Level::save_state() {
   prepare();
   std::visit(
       [&](const auto& law) {
-        if (!lists_valid_) rebuild();
-        if (!forces_valid_) compute_forces<std::decay_t<decltype(law)>, false, true, false>(law);
+        if (comm_.any(!lists_valid_))
+          rebuild();
+        else if (comm_.any(!forces_valid_))
+          ghosts_.forward(ps_, comm_);  // as in run_with: ghosts as fresh as their owners
+        if (comm_.any(!forces_valid_))
+          compute_forces<std::decay_t<decltype(law)>, false, true, false>(law);
       },
       law_);
   forces_valid_ = true;
@@ -107,8 +171,8 @@ LevelState Level::save_state() {
                                                   ps_.inv_rolling_inertia.data() + nl);
   put_ints(s, "particles/material", ps_.material.data(), nl);
   put_ints(s, "particles/id", ps_.id.data(), nl);
-  put_ints(s, "ghosts/owner", ps_.ghost_owner.data(), ps_.ghost_owner.size());
-  put(s, "ghosts/shift", ps_.ghost_shift.data(), ps_.ghost_shift.size());
+  put_ghost_stages(s, ghosts_.stages());
+  put_decomposition(s, decomposition_, comm_.size());
   put(s, "lists/x_at_build", x_at_build_.data(), x_at_build_.size());
   put_list(s, "lists/pairs", pairs_);
   put_list(s, "lists/walls", wall_contacts_);
@@ -129,7 +193,57 @@ LevelState Level::save_state() {
   return s;
 }
 
-void Level::load_state(const LevelState& s) {
+namespace {
+
+// The particle arrays of a saved state (owned [0, no), then ghosts), checked for consistency.
+struct SavedParticles {
+  std::size_t no = 0, nl = 0;
+  std::vector<Vec3> x, v, w, f, t;
+  const std::vector<double>*radius, *mass, *inv_mass, *inv_inertia, *inv_rolling;
+  const std::vector<std::int64_t>*material, *id;
+
+  SavedParticles(const LevelState& s, int n_materials) {
+    nl = reals(s, "particles/radius").size();
+    no = static_cast<std::size_t>(ints(s, "scalars").at(5));
+    if (no > nl) throw std::runtime_error("checkpoint particle counts are corrupt");
+    radius = &reals(s, "particles/radius");
+    mass = &reals(s, "particles/mass");
+    inv_mass = &reals(s, "particles/inv_mass");
+    inv_inertia = &reals(s, "particles/inv_inertia");
+    inv_rolling = &reals(s, "particles/inv_rolling_inertia");
+    material = &ints(s, "particles/material");
+    id = &ints(s, "particles/id");
+    if (mass->size() != nl || inv_mass->size() != nl || inv_inertia->size() != nl ||
+        inv_rolling->size() != nl || material->size() != nl || id->size() != nl)
+      throw std::runtime_error("checkpoint particle arrays have different lengths");
+    for (std::size_t k = 0; k < nl; ++k)
+      if ((*material)[k] < 0 || (*material)[k] >= n_materials)
+        throw std::runtime_error("checkpoint particle material index out of range");
+    for (auto* a : {&x, &v, &w, &f, &t}) a->resize(nl);
+    get(s, "particles/position", x.data(), nl);
+    get(s, "particles/velocity", v.data(), nl);
+    get(s, "particles/angular_velocity", w.data(), nl);
+    get(s, "particles/force", f.data(), nl);
+    get(s, "particles/torque", t.data(), nl);
+  }
+
+  // Appends saved particle k to `ps` as an owned particle with its saved bits (add_owned would
+  // derive 1/m and 1/I anew).
+  void add_owned_to(ParticleStore& ps, std::size_t k) const {
+    ps.add_owned((*id)[k], x[k], v[k], w[k], (*radius)[k], (*mass)[k], 1 / (*inv_inertia)[k],
+                 static_cast<std::int32_t>((*material)[k]));
+    const Index i = ps.n_owned() - 1;
+    ps.inv_mass[i] = (*inv_mass)[k];
+    ps.inv_inertia[i] = (*inv_inertia)[k];
+    ps.inv_rolling_inertia[i] = (*inv_rolling)[k];
+    ps.force[i] = f[k];
+    ps.torque[i] = t[k];
+  }
+};
+
+}  // namespace
+
+void Level::check_signature(const LevelState& s) const {
   auto sig = s.texts.find("signature");
   if (sig == s.texts.end()) throw std::runtime_error("checkpoint lacks its set-up signature");
   if (sig->second != signature())
@@ -138,69 +252,33 @@ void Level::load_state(const LevelState& s) {
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
   if (si.size() != 7 || sr.size() != 6) throw std::runtime_error("checkpoint scalars are corrupt");
+  const auto& dec = ints(s, "decomposition");
+  const auto& cuts = reals(s, "decomposition/cuts");
+  if (dec.size() != 5 || dec[1] < 1 || dec[2] < 1 || dec[3] < 1 ||
+      cuts.size() != static_cast<std::size_t>(dec[1] + dec[2] + dec[3] + 3))
+    throw std::runtime_error("checkpoint decomposition is corrupt");
+}
+
+// Scalars shared by every rank's state (step, time, ids, time step, skin, statistics); `lost`
+// is the rank's own count.
+void Level::load_scalars(const LevelState& s, std::int64_t lost) {
+  const auto& si = ints(s, "scalars");
+  const auto& sr = reals(s, "scalars");
+  step_ = si[0];
+  step_at_dt_change_ = si[1];
+  next_id_ = si[2];
+  lost_ = lost;
+  rebuilds_ = si[4];
+  stats_.contacts = si[6];
+  time_ = sr[0];
+  time_at_dt_change_ = sr[1];
   dt_ = sr[2];
   skin_ = sr[3];
-  prepare();  // law tables and history layout of this set-up
-  const std::size_t nl = reals(s, "particles/radius").size();
-  const std::size_t no = static_cast<std::size_t>(si[5]);
-  if (no > nl) throw std::runtime_error("checkpoint particle counts are corrupt");
+  mesh_bin_margin_ = sr[4];
+  stats_.max_overlap_ratio = sr[5];
+}
 
-  ps_.clear_ghosts();
-  ParticleStore fresh;
-  fresh.reserve(static_cast<Index>(no));
-  const auto& radius = reals(s, "particles/radius");
-  const auto& mass = reals(s, "particles/mass");
-  const auto& inv_mass = reals(s, "particles/inv_mass");
-  const auto& inv_inertia = reals(s, "particles/inv_inertia");
-  const auto& inv_rolling = reals(s, "particles/inv_rolling_inertia");
-  const auto& material = ints(s, "particles/material");
-  const auto& id = ints(s, "particles/id");
-  if (mass.size() != nl || inv_mass.size() != nl || inv_inertia.size() != nl ||
-      inv_rolling.size() != nl || material.size() != nl || id.size() != nl)
-    throw std::runtime_error("checkpoint particle arrays have different lengths");
-  std::vector<Vec3> x(nl), v(nl), w(nl), f(nl), t(nl);
-  get(s, "particles/position", x.data(), nl);
-  get(s, "particles/velocity", v.data(), nl);
-  get(s, "particles/angular_velocity", w.data(), nl);
-  get(s, "particles/force", f.data(), nl);
-  get(s, "particles/torque", t.data(), nl);
-  for (std::size_t k = 0; k < no; ++k) {
-    if (material[k] < 0 || material[k] >= materials_.n_materials())
-      throw std::runtime_error("checkpoint particle material index out of range");
-    fresh.add_owned(id[k], x[k], v[k], w[k], radius[k], mass[k], 1 / inv_inertia[k],
-                    static_cast<std::int32_t>(material[k]));
-    // add_owned derives 1/m and 1/I; keep the saved bits.
-    fresh.inv_mass[k] = inv_mass[k];
-    fresh.inv_inertia[k] = inv_inertia[k];
-    fresh.inv_rolling_inertia[k] = inv_rolling[k];
-    fresh.force[k] = f[k];
-    fresh.torque[k] = t[k];
-  }
-  const auto& owner = ints(s, "ghosts/owner");
-  std::vector<Vec3> shift(owner.size());
-  get(s, "ghosts/shift", shift.data(), shift.size());
-  if (owner.size() != nl - no) throw std::runtime_error("checkpoint ghost arrays are corrupt");
-  for (std::size_t g = 0; g < owner.size(); ++g) {
-    if (owner[g] < 0 || static_cast<std::size_t>(owner[g]) >= no)
-      throw std::runtime_error("checkpoint ghost owner out of range");
-    fresh.add_ghost(static_cast<Index>(owner[g]), shift[g]);
-    const std::size_t k = no + g;
-    fresh.position[k] = x[k];
-    fresh.force[k] = f[k];
-    fresh.torque[k] = t[k];
-  }
-  ps_ = std::move(fresh);
-
-  x_at_build_.resize(no);
-  get(s, "lists/x_at_build", x_at_build_.data(), no);
-  get_list(s, "lists/pairs", pairs_);
-  get_list(s, "lists/walls", wall_contacts_);
-  for (auto p : pairs_.partner)
-    if (p < 0 || static_cast<std::size_t>(p) >= nl)
-      throw std::runtime_error("checkpoint pair list refers to a missing particle");
-  if (pairs_.first.size() != no + 1 || wall_contacts_.first.size() != no + 1)
-    throw std::runtime_error("checkpoint contact lists do not match the particle count");
-
+void Level::load_walls(const LevelState& s) {
   wall_shift_ = reals(s, "walls/shift");
   if (wall_shift_.size() != walls_.size())
     throw std::runtime_error("checkpoint wall count differs");
@@ -233,24 +311,142 @@ void Level::load_state(const LevelState& s) {
       mesh_bins_valid_[k] = 0;  // rebuilt from these vertices at the next list build
     }
   }
+  any_servo_ = false;
+  for (const Wall& w : walls_) any_servo_ = any_servo_ || w.servo.enabled;
+}
 
-  step_ = si[0];
-  step_at_dt_change_ = si[1];
-  next_id_ = si[2];
-  lost_ = si[3];
-  rebuilds_ = si[4];
-  stats_.contacts = si[6];
-  time_ = sr[0];
-  time_at_dt_change_ = sr[1];
+void Level::load_state(const LevelState& s) {
+  check_signature(s);
+  const auto& dec = ints(s, "decomposition");
+  const auto& cuts = reals(s, "decomposition/cuts");
+  if (dec[0] != comm_.size() || dec[4] != comm_.rank())
+    throw InvalidArgument("checkpoint state of rank " + std::to_string(dec[4]) + " of " +
+                          std::to_string(dec[0]) + " cannot be loaded exactly on rank " +
+                          std::to_string(comm_.rank()) + " of " + std::to_string(comm_.size()) +
+                          " (load_redistributed takes any rank count)");
+  requested_grid_ = {static_cast<int>(dec[1]), static_cast<int>(dec[2]), static_cast<int>(dec[3])};
+  decomposition_ = Decomposition::uniform(domain_, requested_grid_, comm_.rank());
+  for (int a = 0, k = 0; a < 3; ++a)
+    for (int c = 0; c <= requested_grid_[a]; ++c) decomposition_.cuts[a][c] = cuts[k++];
+  decomposed_ = true;
+  const auto& sr = reals(s, "scalars");
   dt_ = sr[2];
   skin_ = sr[3];
-  mesh_bin_margin_ = sr[4];
-  stats_.max_overlap_ratio = sr[5];
+  prepare();  // law tables and history layout of this set-up
+  const SavedParticles saved(s, materials_.n_materials());
+  const std::size_t no = saved.no, nl = saved.nl;
+
+  ps_.clear_ghosts();
+  ParticleStore fresh;
+  fresh.reserve(static_cast<Index>(nl));
+  for (std::size_t k = 0; k < no; ++k) saved.add_owned_to(fresh, k);
+  std::vector<GhostStage> stages = get_ghost_stages(s, no, nl);
+  fresh.add_ghost_slots(static_cast<Index>(nl - no));
+  for (std::size_t k = no; k < nl; ++k) {
+    fresh.position[k] = saved.x[k];
+    fresh.velocity[k] = saved.v[k];
+    fresh.angular_velocity[k] = saved.w[k];
+    fresh.force[k] = saved.f[k];
+    fresh.torque[k] = saved.t[k];
+    fresh.radius[k] = (*saved.radius)[k];
+    fresh.mass[k] = (*saved.mass)[k];
+    fresh.inv_mass[k] = (*saved.inv_mass)[k];
+    fresh.inv_inertia[k] = (*saved.inv_inertia)[k];
+    fresh.inv_rolling_inertia[k] = (*saved.inv_rolling)[k];
+    fresh.material[k] = static_cast<std::int32_t>((*saved.material)[k]);
+    fresh.id[k] = (*saved.id)[k];
+  }
+  ps_ = std::move(fresh);
+  ghosts_.set_stages(std::move(stages));
+
+  x_at_build_.resize(no);
+  get(s, "lists/x_at_build", x_at_build_.data(), no);
+  get_list(s, "lists/pairs", pairs_);
+  get_list(s, "lists/walls", wall_contacts_);
+  for (auto p : pairs_.partner)
+    if (p < 0 || static_cast<std::size_t>(p) >= nl)
+      throw std::runtime_error("checkpoint pair list refers to a missing particle");
+  if (pairs_.first.size() != no + 1 || wall_contacts_.first.size() != no + 1)
+    throw std::runtime_error("checkpoint contact lists do not match the particle count");
+
+  load_walls(s);
+  load_scalars(s, ints(s, "scalars")[3]);
   load_insertion_state(s);
   origin_.assign(no, -1);
   pair_carry_ = HistoryCarry();
   wall_carry_ = HistoryCarry();
   lists_valid_ = true;
+  forces_valid_ = true;
+}
+
+void Level::load_redistributed(const std::vector<LevelState>& states) {
+  if (states.empty()) throw std::runtime_error("checkpoint holds no rank state");
+  for (const LevelState& s : states) check_signature(s);
+  const LevelState& first = states.front();
+  if (static_cast<std::size_t>(ints(first, "decomposition")[0]) != states.size())
+    throw std::runtime_error("checkpoint holds " + std::to_string(states.size()) +
+                             " rank states, written by " +
+                             std::to_string(ints(first, "decomposition")[0]) + " ranks");
+  const auto& sr = reals(first, "scalars");
+  dt_ = sr[2];
+  skin_ = sr[3];
+  prepare();  // law tables, history layout and this run's decomposition
+  const int stride = history_size(law_);
+
+  // Every saved owned particle that lies in this rank's subdomain, with the touching entries of
+  // the pairs it stores (keyed by the partner's id) and of its wall contacts (primitive index).
+  ps_.clear_ghosts();
+  ghosts_.clear();
+  ParticleStore fresh;
+  pair_carry_.start(stride);
+  wall_carry_.start(stride);
+  std::int64_t lost = 0;
+  for (const LevelState& s : states) {
+    const SavedParticles saved(s, materials_.n_materials());
+    ContactList pairs, walls;
+    pairs.history_stride = walls.history_stride = stride;
+    get_list(s, "lists/pairs", pairs);
+    get_list(s, "lists/walls", walls);
+    if (pairs.first.size() != saved.no + 1 || walls.first.size() != saved.no + 1)
+      throw std::runtime_error("checkpoint contact lists do not match the particle count");
+    std::vector<GlobalId> keys;
+    std::vector<Real> values;
+    auto carry = [&](const ContactList& list, std::size_t k, bool by_id, HistoryCarry& out) {
+      keys.clear();
+      values.clear();
+      for (Index e = list.first[k]; e < list.first[k + 1]; ++e) {
+        if (!list.touching[e]) continue;
+        const Index p = list.partner[e];
+        if (by_id && (p < 0 || static_cast<std::size_t>(p) >= saved.nl))
+          throw std::runtime_error("checkpoint pair list refers to a missing particle");
+        keys.push_back(by_id ? (*saved.id)[p] : p);
+        values.insert(values.end(), list.history.begin() + static_cast<std::size_t>(e) * stride,
+                      list.history.begin() + static_cast<std::size_t>(e + 1) * stride);
+      }
+      out.append_row(keys.data(), values.data(), static_cast<Index>(keys.size()));
+    };
+    for (std::size_t k = 0; k < saved.no; ++k) {
+      if (!owns(saved.x[k])) continue;
+      saved.add_owned_to(fresh, k);
+      carry(pairs, k, true, pair_carry_);
+      carry(walls, k, false, wall_carry_);
+    }
+    lost += ints(s, "scalars")[3];
+  }
+  ps_ = std::move(fresh);
+  origin_.resize(ps_.n_owned());
+  for (Index i = 0; i < ps_.n_owned(); ++i) origin_[i] = i;
+  pairs_ = ContactList();
+  wall_contacts_ = ContactList();
+  pairs_.history_stride = wall_contacts_.history_stride = stride;
+  x_at_build_.clear();
+
+  load_walls(first);
+  load_scalars(first, comm_.rank() == 0 ? lost : 0);
+  load_insertion_state(first);
+  // The saved forces are complete (ghost shares folded in): the first step uses them; the lists
+  // are built for this decomposition first, restoring the histories from the carries.
+  lists_valid_ = false;
   forces_valid_ = true;
 }
 

@@ -1,22 +1,60 @@
-// GhostExchange: creates ghost particles and moves data between owners and ghosts.
-// Serial build: ghosts are periodic images. The MPI build (later) adds halo copies from
-// neighbouring ranks through the same three operations.
-//   build   – after owned particles were wrapped into the box: one image per periodic
-//             direction combination for every owned particle within `cutoff` of a face;
-//   forward – copies positions (owner + shift) and velocities to ghosts every step;
-//   reverse – adds ghost forces and torques onto their owners (each pair is computed once).
+// GhostExchange: the ghost particles of one rank — periodic images and halo copies from the
+// neighbouring ranks, made by one mechanism (DESIGN.md 2.1, 5).
+//
+// Ghosts are built in stages, axis by axis (x, y, z) and per axis towards the lower then the
+// upper neighbour: a stage sends the particles present when its axis began (owned ones and the
+// ghosts of earlier axes) that lie within `cutoff` of the subdomain's lower (upper) face, and
+// receives the matching ones from the opposite neighbour as new ghosts. Corners and edges are
+// covered because later axes forward the ghosts of earlier ones (the scheme of LAMMPS'
+// `comm brick`). Crossing a periodic boundary adds the box length to the positions sent; a stage
+// whose neighbour is the rank itself (one rank along a periodic axis) copies locally, which is
+// the serial run's periodic images. One hop per axis suffices because every slab is at least
+// `cutoff` wide (checked by the level).
+//
+//   build   – creates the ghosts (full particle data) after the owned particles were migrated;
+//   forward – every step: positions (plus shift), velocities and spins into the ghost slots;
+//   reverse – stages in reverse order: ghost forces and torques added to the particles they
+//             mirror (which may be ghosts of an earlier stage, passed on in their own stage).
+// Pairs are stored once (neighbor_list.hpp), so Newton's third law holds across ranks: a pair
+// between ranks is computed on the rank owning its particle with the smaller global id and the
+// partner's share travels back in `reverse`.
 #pragma once
 
+#include <vector>
+
+#include "parallel/communicator.hpp"
+#include "parallel/decomposition.hpp"
 #include "state/domain.hpp"
 #include "state/particle_store.hpp"
 
 namespace grainscale {
 
+struct GhostStage {
+  int axis = 0;
+  int dir = -1;               // -1: towards the lower neighbour, +1: towards the upper one
+  int send_to = -1;           // rank (-1: none: closed end)
+  int recv_from = -1;         // rank (-1: none)
+  Vec3 shift = Vec3::Zero();  // added to the positions sent
+  std::vector<Index> send;    // local particles sent
+  Index recv_first = 0;       // ghost slots [recv_first, recv_first + recv_count)
+  Index recv_count = 0;
+};
+
 class GhostExchange {
  public:
-  void build(ParticleStore& ps, const Domain& domain, Real cutoff) const;
-  void forward(ParticleStore& ps) const { ps.update_ghosts(); }
-  void reverse(ParticleStore& ps) const;
+  void build(ParticleStore& ps, const Domain& domain, const Decomposition& decomposition,
+             const Communicator& comm, Real cutoff);
+  void forward(ParticleStore& ps, const Communicator& comm);
+  void reverse(ParticleStore& ps, const Communicator& comm);
+  void clear() { stages_.clear(); }
+
+  const std::vector<GhostStage>& stages() const { return stages_; }
+  // Checkpoints: the stages of a saved exchange (with the ghost slots restored alongside).
+  void set_stages(std::vector<GhostStage> stages) { stages_ = std::move(stages); }
+
+ private:
+  std::vector<GhostStage> stages_;
+  std::vector<Real> send_buffer_, recv_buffer_;
 };
 
 // Wraps owned particles into the box along periodic axes.

@@ -28,6 +28,32 @@ class HistoryCarry {
   bool empty() const { return keys_.empty(); }
   std::size_t size() const { return keys_.size(); }
 
+  // Row access (migration between ranks, checkpoints): the entries saved for the particle that
+  // had index `row` at save(); rows that were never saved are empty.
+  Index row_size(Index row) const {
+    return row >= 0 && static_cast<std::size_t>(row) + 1 < first_.size()
+               ? first_[row + 1] - first_[row]
+               : 0;
+  }
+  const GlobalId* row_keys(Index row) const { return keys_.data() + first_[row]; }
+  const Real* row_values(Index row) const {
+    return values_.data() + static_cast<std::size_t>(first_[row]) * stride_;
+  }
+  int stride() const { return stride_; }
+  Index rows() const { return first_.empty() ? 0 : static_cast<Index>(first_.size()) - 1; }
+  // Starts an empty carry with `stride` values per entry; rows are then appended in order
+  // (row k for the particle whose origin is k).
+  void start(int stride) {
+    clear();
+    stride_ = stride;
+    first_.push_back(0);
+  }
+  void append_row(const GlobalId* keys, const Real* values, Index count) {
+    keys_.insert(keys_.end(), keys, keys + count);
+    values_.insert(values_.end(), values, values + static_cast<std::size_t>(count) * stride_);
+    first_.push_back(static_cast<Index>(keys_.size()));
+  }
+
  private:
   std::vector<Index> first_;
   std::vector<GlobalId> keys_;

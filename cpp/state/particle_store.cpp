@@ -55,43 +55,12 @@ void ParticleStore::add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const 
   n_owned_ = i + 1;
 }
 
-void ParticleStore::clear_ghosts() {
-  resize_all(n_owned_);
-  ghost_owner.clear();
-  ghost_shift.clear();
-}
+void ParticleStore::clear_ghosts() { resize_all(n_owned_); }
 
-void ParticleStore::add_ghost(Index owner, const Vec3& shift) {
-  Index g = n_local_;
-  resize_all(g + 1);
-  position[g] = position[owner] + shift;
-  velocity[g] = velocity[owner];
-  angular_velocity[g] = angular_velocity[owner];
-  force[g] = Vec3::Zero();
-  torque[g] = Vec3::Zero();
-  radius[g] = radius[owner];
-  mass[g] = mass[owner];
-  inv_mass[g] = inv_mass[owner];
-  inv_inertia[g] = inv_inertia[owner];
-  inv_rolling_inertia[g] = inv_rolling_inertia[owner];
-  material[g] = material[owner];
-  id[g] = id[owner];
-  ghost_owner.push_back(owner);
-  ghost_shift.push_back(shift);
-}
-
-void ParticleStore::update_ghosts() {
-  Vec3* x = position.data();
-  Vec3* v = velocity.data();
-  Vec3* w = angular_velocity.data();
-  const Index n0 = n_owned_;
-  const Index ng = n_ghost();
-  for (Index k = 0; k < ng; ++k) {
-    const Index o = ghost_owner[k];
-    x[n0 + k] = x[o] + ghost_shift[k];
-    v[n0 + k] = v[o];
-    w[n0 + k] = w[o];
-  }
+Index ParticleStore::add_ghost_slots(Index count) {
+  const Index first = n_local_;
+  resize_all(n_local_ + count);
+  return first;
 }
 
 namespace {

@@ -1,7 +1,6 @@
 // ParticleStore: structure-of-arrays particle data of one level on one rank.
 // Layout: owned particles [0, n_owned), then ghosts [n_owned, n_local). Ghosts are periodic
-// images (and, under MPI, halo copies); each remembers the local owner it mirrors and the
-// shift added to the owner's position.
+// images and halo copies from neighbouring ranks; the GhostExchange knows where each came from.
 #pragma once
 
 #include <vector>
@@ -21,9 +20,6 @@ class ParticleStore {
   SharedArray<Real> inv_rolling_inertia;
   SharedArray<std::int32_t> material;
   SharedArray<GlobalId> id;
-  // Ghost bookkeeping (length n_ghost, indexed by ghost - n_owned).
-  std::vector<Index> ghost_owner;
-  std::vector<Vec3> ghost_shift;
 
   Index n_owned() const { return n_owned_; }
   Index n_ghost() const { return n_local_ - n_owned_; }
@@ -35,10 +31,8 @@ class ParticleStore {
   void add_owned(GlobalId gid, const Vec3& x, const Vec3& v, const Vec3& w, Real r, Real m,
                  Real inertia, std::int32_t mat);
   void clear_ghosts();
-  // Appends a ghost image of owned particle `owner` shifted by `shift`.
-  void add_ghost(Index owner, const Vec3& shift);
-  // Copies positions and velocities of owners into their ghost images.
-  void update_ghosts();
+  // Appends `count` ghost slots (values unset) and returns the first one.
+  Index add_ghost_slots(Index count);
   // Reorders and filters owned particles: new slot k takes old particle order[k]; particles
   // not listed are dropped. Ghosts must be cleared.
   void select_owned(const std::vector<Index>& order);

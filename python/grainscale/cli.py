@@ -14,19 +14,12 @@ import platform
 import sys
 from collections.abc import Sequence
 
-# Names under which the core may report an MPI build (a bool or a function returning one).
-_MPI_FLAGS = ("with_mpi", "has_mpi", "mpi_enabled", "built_with_mpi")
 
-
-def mpi_build() -> bool | None:
-    """True/False if the C++ core says whether it was built with MPI, None if it does not say."""
+def mpi_build() -> bool:
+    """Whether the C++ core was built with MPI (domain decomposition under mpirun)."""
     from . import _core
 
-    for name in _MPI_FLAGS:
-        flag = getattr(_core, name, None)
-        if flag is not None:
-            return bool(flag() if callable(flag) else flag)
-    return None
+    return bool(_core.with_mpi())
 
 
 def info_lines() -> list[str]:

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from . import _core
+from . import _core, parallel
 from ._validate import positive, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo
@@ -106,6 +106,12 @@ class Simulation:
             3-D ones (a Hertz force in 2-D is the force between the discs' sphere equivalents,
             not a line-contact law): forces are N on a 1 m thick disc, so a wall force / wall
             length is a stress per unit thickness (Pa).
+        comm: the ranks that run this simulation (an mpi4py communicator); None means
+            ``MPI.COMM_WORLD`` when started by ``mpirun`` with several ranks, else a serial run
+            (see :mod:`grainscale.parallel`). Under MPI every rank makes the same calls with the
+            same arguments; each owns the particles of its subdomain.
+        processor_grid: (px, py, pz) ranks along x, y, z (px py pz = ranks); None chooses the
+            grid with the smallest subdomain surface for the box's shape.
 
     Example:
         >>> import grainscale as gs
@@ -129,14 +135,26 @@ class Simulation:
         quiet: bool = False,
         record_contacts: bool = False,
         dimension: int = 3,
+        comm: Any = None,
+        processor_grid: Sequence[int] | None = None,
     ) -> None:
         if not isinstance(domain, Box):
             raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
         if isinstance(dimension, bool) or dimension not in (2, 3):
             raise ValueError(f"Simulation.dimension must be 2 or 3, got {dimension!r}")
         self.domain = domain
-        self._level = _core.Level(domain.lo, domain.hi, domain.periodic)
+        self._comm = parallel.resolve(comm)
+        handle = None if self._comm is None else int(self._comm.py2f())
+        self._level = _core.Level(domain.lo, domain.hi, domain.periodic, handle)
         self._level.set_dimension(int(dimension))
+        if processor_grid is not None:
+            grid = tuple(processor_grid)
+            if len(grid) != 3 or not all(isinstance(g, int) and g >= 1 for g in grid):
+                raise ValueError(
+                    f"Simulation.processor_grid must be three positive integers, got "
+                    f"{processor_grid!r}"
+                )
+            self._level.set_processor_grid(grid)
         self._materials: list[Material] = []
         self.contact: ContactLaw = contact if contact is not None else HertzMindlin()
         if not isinstance(self.contact, HertzMindlin | Linear | EEPA):
@@ -176,6 +194,21 @@ class Simulation:
     def dimension(self) -> int:
         """3 (spheres) or 2 (discs in the plane z = plane_z)."""
         return int(self._level.dimension)
+
+    @property
+    def comm(self) -> Any:
+        """The mpi4py communicator of a parallel run, None for a serial one."""
+        return self._comm
+
+    @property
+    def rank(self) -> int:
+        """This process's rank in the simulation's communicator (0 when serial)."""
+        return int(self._level.rank)
+
+    @property
+    def ranks(self) -> int:
+        """Number of ranks the simulation is decomposed over (1 when serial)."""
+        return int(self._level.ranks)
 
     @property
     def plane_z(self) -> float:
@@ -450,17 +483,24 @@ class Simulation:
 
     @property
     def num_particles(self) -> int:
+        """Particles over all ranks (collective)."""
+        return int(self._level.global_count())
+
+    @property
+    def num_local_particles(self) -> int:
+        """Particles owned by this rank (those ``particles()`` shows)."""
         return int(self._level.num_owned)
 
     @property
     def lost_particles(self) -> int:
-        """Particles removed because they left the domain through a closed axis."""
+        """Particles removed because they left the domain through a closed axis (collective)."""
         return int(self._level.lost_particles)
 
     @contextmanager
     def particles(self, writable: bool = True) -> Iterator[ParticleView]:
         """Zero-copy access to the particle arrays, valid only inside the block.
 
+        Under MPI the arrays hold this rank's particles only (see ``gather`` for all of them).
         Changes to position, velocity or angular_velocity are detected on exit: the core then
         rebuilds its lists / re-evaluates forces before the next step.
         """
@@ -472,7 +512,7 @@ class Simulation:
             yield view
         finally:
             view._close()
-            if before is not None and self.num_particles == len(before["position"]):
+            if before is not None and self.num_local_particles == len(before["position"]):
                 if not np.array_equal(before["position"], self._level.view("position")):
                     self._level.mark_positions_changed()
                 elif not (
@@ -482,6 +522,57 @@ class Simulation:
                     )
                 ):
                     self._level.mark_velocities_changed()
+
+    def gather(
+        self, fields: Sequence[str] = ("position", "velocity", "angular_velocity", "radius", "id")
+    ) -> dict[str, np.ndarray]:
+        """Collective: copies of the particle arrays of every rank, sorted by id, on every rank.
+
+        Args:
+            fields: names of ``particles()`` arrays (``id`` is always included).
+        """
+        names = list(dict.fromkeys([*fields, "id"]))
+        for name in names:
+            if name not in _VECTOR_FIELDS + _SCALAR_FIELDS:
+                raise ValueError(
+                    f"Simulation.gather.fields must name particle arrays "
+                    f"{_VECTOR_FIELDS + _SCALAR_FIELDS}, got {name!r}"
+                )
+        with self.particles(writable=False) as p:
+            local = {name: np.array(getattr(p, name)) for name in names}
+        if self._comm is not None:
+            parts = self._comm.allgather(local)
+            local = {name: np.concatenate([q[name] for q in parts]) for name in names}
+        order = np.argsort(local["id"], kind="stable")
+        return {name: a[order] for name, a in local.items()}
+
+    def decomposition(self) -> dict[str, Any]:
+        """Collective: processor grid, this rank's grid coordinates, the cut positions per axis
+        (m) and the particle count of every rank."""
+        d = dict(self._level.decomposition())
+        d["counts"] = list(self._level.rank_counts())
+        return d
+
+    def balance(self, every: int | None = None, threshold: float = 1.1) -> dict[str, float]:
+        """Collective: move the subdomain cuts so that every rank holds the same number of
+        particles (along each split axis; the particles move at the next step).
+
+        Args:
+            every: also rebalance automatically at neighbour-list builds at least this many
+                steps apart, when the imbalance exceeds ``threshold`` (0 switches it off).
+            threshold: largest rank count / mean count that automatic balancing accepts.
+
+        Returns: ``{"before": ..., "after": ...}``, the imbalance (largest rank count / mean).
+        """
+        if every is not None:
+            if isinstance(every, bool) or int(every) != every or every < 0:
+                raise ValueError(
+                    f"Simulation.balance.every must be a non-negative integer, got {every!r}"
+                )
+            self._level.set_auto_balance(int(every), float(threshold))
+        self._resolve_defaults()
+        before, after = self._level.balance()
+        return {"before": float(before), "after": float(after)}
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy (J)."""
@@ -502,7 +593,8 @@ class Simulation:
 
     def contacts(self) -> dict[str, np.ndarray]:
         """Touching contacts at the last step: id_i, id_j (-1 - wall index for walls),
-        overlap (m), normal (unit, from j to i), force (N, on i).
+        overlap (m), normal (unit, from j to i), force (N, on i). Under MPI: the contacts this
+        rank computed (each contact is computed on one rank).
 
         Needs ``record_contacts=True`` before the run whose last step is reported.
         """
@@ -513,7 +605,7 @@ class Simulation:
         return dict(self._level.contacts())
 
     def neighbor_pairs(self) -> np.ndarray:
-        """(M, 2) global ids of the pairs in the current Verlet list, each pair once."""
+        """(M, 2) global ids of the pairs in this rank's current Verlet list, each pair once."""
         return np.asarray(self._level.neighbor_pairs())
 
     def thermo(self) -> dict[str, float]:
@@ -590,17 +682,23 @@ class Simulation:
         # Streams count as particles to come: their largest diameter for the skin, their
         # smallest particle's Rayleigh time for the time step.
         d_stream = max((2.0 * h.max_radius for h in self._streams), default=0.0)
-        if not self._skin_fixed and (self.num_particles > 0 or d_stream > 0):
+        n_particles = self.num_particles
+        if not self._skin_fixed and (n_particles > 0 or d_stream > 0):
             d_max = d_stream
-            if self.num_particles > 0:
+            if n_particles > 0:
                 with self.particles(writable=False) as p:
-                    d_max = max(d_max, 2.0 * float(p.radius.max()))
+                    d_local = 2.0 * float(p.radius.max()) if len(p) else 0.0
+                if self._comm is not None:
+                    from mpi4py import MPI
+
+                    d_local = self._comm.allreduce(d_local, op=MPI.MAX)
+                d_max = max(d_max, d_local)
             self._level.set_skin(0.1 * d_max)
             self._skin_fixed = True
         elif not self._skin_fixed:
             self._level.set_skin(1e-3 * float(np.min(self.domain.length)))
         if self._time_step is None:
-            if self.num_particles == 0 and not self._streams:
+            if n_particles == 0 and not self._streams:
                 raise ValueError(
                     "Simulation.time_step must be given when there are no particles, got None"
                 )
@@ -639,14 +737,14 @@ class Simulation:
             target = self.step + max(0, math.ceil((u - self.time) / dt * (1 - 1e-12)))
         if progress is None:
             progress = sys.stderr.isatty() and not os.environ.get("CI")
+        progress = progress and self.rank == 0
         bar = None
         if progress and target > self.step:
             from tqdm.auto import tqdm
 
             bar = tqdm(total=target - self.step, unit="step", leave=False)
         self._rate_clock = (_time.perf_counter(), self.step)
-        self._outputs = [(w, w.next_step(self.step, self.time, dt)) for w, _ in self._outputs]
-        self._write_due_outputs(dt)
+        self._python_step(lambda: self._start_outputs(dt))
         chunk = 1
         try:
             while self.step < target:
@@ -659,21 +757,39 @@ class Simulation:
                 t0 = _time.perf_counter()
                 self._level.run(n)
                 elapsed = _time.perf_counter() - t0
-                # Grow chunks while they are short, so Ctrl-C and the bar stay responsive.
+                # Grow chunks while they are short, so Ctrl-C and the bar stay responsive. Under
+                # MPI every rank must take the same chunks: rank 0's timing decides.
+                if self._comm is not None:
+                    elapsed = self._comm.bcast(elapsed, root=0)
                 if elapsed < 0.05 and n == chunk:
                     chunk = min(2 * chunk, 100000)
                 elif elapsed > 0.2 and chunk > 1:
                     chunk //= 2
                 if bar is not None:
                     bar.update(n)
-                self._write_due_outputs(dt)
+                # Outputs, then thermo (its reductions are collective): each step agreed on.
+                self._python_step(lambda: self._write_due_outputs(dt))
                 if self.thermo_every and self.step % self.thermo_every == 0:
-                    self._log_thermo(print_line=not self.quiet, bar=bar)
+                    self._python_step(lambda: self._log_thermo(print_line=not self.quiet, bar=bar))
         finally:
             if bar is not None:
                 bar.close()
         if not self.thermo_log or self.thermo_log[-1]["step"] != self.step:
             self._log_thermo(print_line=False)
+
+    def _python_step(self, work: Any) -> None:
+        """Runs one Python part between chunks; an error on one rank is raised on all (a part
+        must not start a collective call after something that can fail on one rank only)."""
+        error: BaseException | None = None
+        try:
+            work()
+        except Exception as err:
+            error = err
+        parallel.agree(self._comm, error)
+
+    def _start_outputs(self, dt: float) -> None:
+        self._outputs = [(w, w.next_step(self.step, self.time, dt)) for w, _ in self._outputs]
+        self._write_due_outputs(dt)
 
     def _write_due_outputs(self, dt: float) -> None:
         updated = []
@@ -688,7 +804,7 @@ class Simulation:
         entry = self.thermo()
         self._rate_clock = (_time.perf_counter(), self.step)
         self.thermo_log.append(entry)
-        if print_line:
+        if print_line and self.rank == 0:
             # Lines go through the progress bar when one is shown, so they do not tear it.
             write = bar.write if bar is not None else (lambda s: print(s, flush=True))
             if not self._header_printed:

@@ -117,7 +117,7 @@ def test_corrupt_files_give_clear_errors(tmp_path):
     path = tmp_path / "state.h5"
     sim.checkpoint(path)
     with h5py.File(path, "a") as f:
-        del f["reals/particles/mass"]
+        del f["rank_0/reals/particles/mass"]
     with pytest.raises(RuntimeError, match="checkpoint lacks 'particles/mass'"):
         build(LAWS[0]).restart(path)
 

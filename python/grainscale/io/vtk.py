@@ -6,6 +6,7 @@ Low-level writers (pure numpy):
   renders them directly (use a Glyph filter scaled by ``radius`` for spheres).
 * :func:`write_vtp_mesh` - a triangle surface (Polys) with optional cell / point data.
 * :class:`PVDSeries` - the .pvd "Collection" index that ParaView opens as one time series.
+* :func:`write_pvtp` - the parallel index (.pvtp) of per-rank pieces of one snapshot.
 
 The output operation used by ``Simulation.output()`` is :class:`VTK`.
 
@@ -35,7 +36,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-__all__ = ["VTK", "PVDSeries", "write_vtp", "write_vtp_mesh"]
+__all__ = ["VTK", "PVDSeries", "write_pvtp", "write_vtp", "write_vtp_mesh"]
 
 PathLike = str | os.PathLike
 
@@ -269,6 +270,41 @@ def write_vtp_mesh(
     )
 
 
+def write_pvtp(
+    path: PathLike, pieces: list[str], point_data: Mapping[str, Any], points_dtype: Any = np.float64
+) -> None:
+    """Write the parallel index (PPolyData) of a snapshot written as one .vtp piece per rank.
+
+    Args:
+        path: output file, conventionally ``*.pvtp``; ParaView reads the pieces through it.
+        pieces: file names of the pieces, relative to the directory of ``path``.
+        point_data: name -> an array (or an empty array) with the dtype and number of components
+            of that point-data array in the pieces.
+        points_dtype: dtype of the pieces' points.
+    """
+
+    def describe(name: str | None, values: Any) -> str:
+        arr = np.asarray(values)
+        kind = _VTK_TYPES[np.dtype(arr.dtype).newbyteorder("=")]
+        components = arr.shape[1] if arr.ndim == 2 else 1
+        label = "" if name is None else f" Name={quoteattr(name)}"
+        return f'      <PDataArray type="{kind}"{label} NumberOfComponents="{components}"/>\n'
+
+    lines = [
+        '<?xml version="1.0"?>\n',
+        '<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n',
+        '  <PPolyData GhostLevel="0">\n',
+        "    <PPointData>\n",
+    ]
+    lines += [describe(name, values) for name, values in point_data.items()]
+    lines += ["    </PPointData>\n", "    <PPoints>\n"]
+    lines.append(describe(None, np.zeros((0, 3), dtype=points_dtype)))
+    lines.append("    </PPoints>\n")
+    lines += [f"    <Piece Source={quoteattr(Path(p).as_posix())}/>\n" for p in pieces]
+    lines += ["  </PPolyData>\n", "</VTKFile>\n"]
+    _atomic_write(path, ["".join(lines).encode("utf-8")])
+
+
 class PVDSeries:
     """A ParaView ``.pvd`` collection: a list of (time, file, part) data sets.
 
@@ -323,6 +359,10 @@ class VTK:
     (rad/s), ``force`` (N), ``torque`` (N m, when available), ``id`` (int64), ``material``
     (int32) and ``mass`` (kg). In ParaView open the .pvd and apply Glyph (Sphere, scale by
     ``radius``, scale factor 2) to see the grains.
+
+    Under MPI every rank writes its particles as ``<prefix>_<step:08d>_r<rank>.vtp`` (with a
+    ``rank`` array) and rank 0 writes the parallel index ``<prefix>_<step:08d>.pvtp``, which
+    the .pvd lists; mesh walls are written by rank 0.
 
     Schedule (exactly one of):
         every: simulated-time interval, s. Snapshots at the first step whose time reaches each
@@ -416,7 +456,7 @@ class VTK:
         """Mesh walls: one .vtp per snapshot (all meshes, cell data ``wall``) in ``walls.pvd``;
         written once when no mesh moves."""
         meshes = sim.mesh_walls() if hasattr(sim, "mesh_walls") else []
-        if not meshes:
+        if not meshes or getattr(sim, "rank", 0) != 0:
             return
         moving = any(m["moving"] for m in meshes)
         if not moving and getattr(self, "_walls_written", False):
@@ -451,7 +491,10 @@ class VTK:
         step = int(sim.step)
         time = float(sim.time)
         self.directory.mkdir(parents=True, exist_ok=True)
+        rank, ranks = int(getattr(sim, "rank", 0)), int(getattr(sim, "ranks", 1))
         name = f"{self.prefix}_{step:08d}.vtp"
+        if ranks > 1:
+            name = f"{self.prefix}_{step:08d}_r{rank}.vtp"
         path = self.directory / name
         with sim.particles(writable=False) as p:
             point_data = {
@@ -464,8 +507,16 @@ class VTK:
             if torque is not None:
                 point_data["torque"] = torque
             point_data.update({"id": p.id, "material": p.material, "mass": p.mass})
+            if ranks > 1:
+                point_data["rank"] = np.full(len(p), rank, dtype=np.int32)
             write_vtp(path, p.position, point_data, binary=self.binary, appended=self.appended)
-        self.pvd.add(time, name)
+            if ranks > 1 and rank == 0:
+                index = f"{self.prefix}_{step:08d}.pvtp"
+                pieces = [f"{self.prefix}_{step:08d}_r{r}.vtp" for r in range(ranks)]
+                write_pvtp(self.directory / index, pieces, point_data)
+                name, path = index, self.directory / index
+        if rank == 0:
+            self.pvd.add(time, name)
         if not self.files or self.files[-1] != path:
             self.files.append(path)
         self._write_meshes(sim, step, time)

@@ -1,0 +1,82 @@
+"""MPI support: which communicator a simulation runs on, and errors that reach every rank.
+
+A script runs unchanged under ``mpirun -np N python script.py`` (SPMD): every rank builds the
+same simulation with the same calls, and each ``Simulation`` is decomposed over the ranks of its
+communicator. ``comm=None`` (the default) means ``MPI.COMM_WORLD`` when the process was started
+by an MPI launcher with more than one rank, and a serial run otherwise; pass an mpi4py
+communicator (``MPI.COMM_SELF`` for a serial simulation on every rank, or a sub-communicator)
+to choose. mpi4py is imported only when a run is parallel.
+
+Errors: the C++ core turns an error on one rank into the same exception on every rank at its
+next collective step. Python-side errors between run chunks (an output writer, a callback) go
+through :func:`agree`, which raises on every rank: the original exception where it happened,
+the same exception type with the original message (and the rank) elsewhere.
+"""
+
+from __future__ import annotations
+
+import builtins
+import os
+import sys
+from typing import Any
+
+from . import _core
+
+# Launchers' environment variables that give the number of ranks (Open MPI, MPICH/Hydra, PMIx).
+_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE")
+
+
+def launched_ranks() -> int:
+    """Number of ranks the MPI launcher started (1 when not started by one)."""
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
+        return int(mpi.COMM_WORLD.Get_size())
+    for name in _SIZE_VARIABLES:
+        value = os.environ.get(name)
+        if value and value.isdigit():
+            return int(value)
+    return 1
+
+
+def resolve(comm: Any) -> Any:
+    """The communicator a simulation runs on: an mpi4py communicator of more than one rank, or
+    None for a serial run. Raises ValueError for anything else."""
+    if comm is None:
+        if launched_ranks() <= 1:
+            return None
+        from mpi4py import MPI
+
+        comm = MPI.COMM_WORLD
+    if not (hasattr(comm, "py2f") and hasattr(comm, "Get_size")):
+        raise ValueError(f"Simulation.comm must be an mpi4py communicator or None, got {comm!r}")
+    if comm.Get_size() == 1:
+        return None
+    if not _core.with_mpi():
+        raise ValueError(
+            f"Simulation.comm must have one rank in this build of grainscale (built without MPI), "
+            f"got a communicator of {comm.Get_size()} ranks"
+        )
+    return comm
+
+
+def agree(comm: Any, error: BaseException | None) -> None:
+    """Collective: raise on every rank if ``error`` is set on any (see the module docstring)."""
+    if comm is None:
+        if error is not None:
+            raise error
+        return
+    reports = comm.allgather(None if error is None else (type(error).__name__, str(error)))
+    failed = [r for r, rep in enumerate(reports) if rep is not None]
+    if not failed:
+        return
+    if error is not None:
+        raise error
+    rank = failed[0]
+    name, message = reports[rank]
+    text = f"{message} (raised on rank {rank})"
+    kind = getattr(builtins, name, None)
+    try:
+        same = kind(text) if isinstance(kind, type) and issubclass(kind, Exception) else None
+    except Exception:  # an exception type with other constructor arguments
+        same = None
+    raise same if same is not None else RuntimeError(f"{name}: {text}")

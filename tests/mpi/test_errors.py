@@ -1,0 +1,61 @@
+"""Errors under MPI (issue 6): an error on one rank is raised on every rank as the same Python
+exception, quickly, and never leaves a rank waiting in a collective call."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from mpi_cases import settle
+
+import grainscale as gs
+
+
+def test_error_on_one_rank_reaches_every_rank_within_a_second(world):
+    sim = settle(world, 2000)
+    sim.run(steps=10)
+    last = world.size - 1
+    with sim.particles() as p:
+        if sim.rank == last and len(p):
+            p.velocity[0] = np.nan  # only this rank's particle goes bad
+    started = time.perf_counter()
+    with pytest.raises(RuntimeError, match=rf"non-finite position or velocity.*rank {last}"):
+        sim.run(steps=100)
+    elapsed = world.allreduce(time.perf_counter() - started, op=max_op())
+    assert elapsed < 1.0
+
+
+class FailingOutput:
+    """An output operation that fails on one rank only (a full disk, say)."""
+
+    def __init__(self, rank: int) -> None:
+        self.rank = rank
+
+    def next_step(self, step: int, time: float, time_step: float) -> int:
+        return step + 5
+
+    def write(self, sim: gs.Simulation) -> None:
+        if sim.rank == self.rank:
+            raise OSError("no space left on device")
+
+
+def test_python_error_on_one_rank_is_raised_on_all(world):
+    sim = settle(world, 1000)
+    sim.output(FailingOutput(rank=world.size - 1))
+    with pytest.raises(OSError, match="no space left on device"):
+        sim.run(steps=50)
+    assert world.allreduce(sim.step) == world.size * sim.step  # every rank stopped at one step
+
+
+def test_invalid_input_is_refused_on_every_rank(world):
+    sim = settle(world, 500)
+    with pytest.raises(ValueError, match="Simulation.processor_grid"):
+        gs.Simulation(domain=sim.domain, comm=world, processor_grid=(world.size + 1, 1, 1))
+    sim.run(steps=5)  # the ranks are still in step
+
+
+def max_op():
+    from mpi4py import MPI
+
+    return MPI.MAX
