@@ -153,8 +153,9 @@ def print_summary(entry: dict[str, Any], codes: list[str], ranks: list[int]) -> 
         for k in ranks:
             c = s[code][str(k)]
             eff = c.get("efficiency_median")
+            ns = c["median_ns_per_particle_step"]
             print(
-                f"  {code:<11s} {k} rank(s): {c['median_ns_per_particle_step']:7.1f} ns/particle-step"
+                f"  {code:<11s} {k} rank(s): {ns:7.1f} ns/particle-step"
                 + (f", parallel efficiency {eff:.3f}" if eff is not None else "")
             )
     for k in ranks:

@@ -7,7 +7,8 @@ namespace py = pybind11;
 void export_level(py::module_& m);
 void export_helpers(py::module_& m);
 void export_checkpoint(py::module_& m);
-void export_insert(py::module_& m);  // after export_level: adds methods to Level
+void export_insert(py::module_& m);    // after export_level: adds methods to Level
+void export_coupling(py::module_& m);  // after export_insert: adds methods to Level
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "grainscale C++ core (private; use the grainscale package)";
@@ -15,4 +16,5 @@ PYBIND11_MODULE(_core, m) {
   export_helpers(m);
   export_checkpoint(m);
   export_insert(m);
+  export_coupling(m);
 }

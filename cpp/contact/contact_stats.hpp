@@ -15,12 +15,14 @@ struct ContactRecord {
   Real overlap;
   Vec3 normal;
   Vec3 force;  // on i
+  Index i;     // local index of i (owned) at the recording step
+  Index j;     // local index of j (owned or ghost), -1 for a wall
 };
 
 struct ContactStats {
   std::int64_t contacts = 0;
   Real max_overlap_ratio = 0;  // overlap / smaller radius of the pair
-  bool record = false;         // keep `records` (off by default: 72 bytes per contact)
+  bool record = false;         // keep `records` (off by default: 80 bytes per contact)
   std::vector<ContactRecord> records;
 
   void clear() {

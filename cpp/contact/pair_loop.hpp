@@ -85,7 +85,7 @@ void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list
       if constexpr (kStats) {
         ++stats.contacts;
         stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / std::min(ri, rj));
-        if (stats.record) stats.records.push_back({ps.id[i], ps.id[j], overlap, nrm, F});
+        if (stats.record) stats.records.push_back({ps.id[i], ps.id[j], overlap, nrm, F, i, j});
       }
     }
     f[i] += fi;

@@ -177,7 +177,8 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       if constexpr (kStats) {
         ++stats.contacts;
         stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / ri);
-        if (stats.record) stats.records.push_back({ps.id[i], -1 - GlobalId(w), overlap, nrm, F});
+        if (stats.record)
+          stats.records.push_back({ps.id[i], -1 - GlobalId(w), overlap, nrm, F, i, -1});
       }
     };
     auto release = [&](Index k) {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -16,9 +17,14 @@
 
 namespace grainscale {
 
+class ExchangeGrid;
+
 struct OutletSpec {
   Region region = Region::box(Vec3::Zero(), Vec3::Ones());
   int every = 1;  // steps between checks
+  // When set, the outlet removes the particles outside the grid's region cells instead (the
+  // fine level of a hierarchy: particles leaving its region), and `region` is not used.
+  std::shared_ptr<const ExchangeGrid> keep;
 };
 
 class Outlet {

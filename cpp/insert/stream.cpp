@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "insert/placement.hpp"
 
 namespace grainscale {
 
@@ -65,35 +66,12 @@ bool StreamInserter::schedule(Real time, Real tolerance) {
 
 void StreamInserter::place(OccupancyGrid& grid, const WallClearance& walls,
                            std::vector<Vec3>& position, std::vector<Real>& radius) {
-  // A run of consecutive failures means the slab is full: keep the rest for the next batch
-  // instead of spending attempts on them.
-  const int give_up_after = 32;
-  int failures = 0;
-  std::size_t k = 0;
-  std::vector<Real> still_pending;
-  for (; k < pending_.size() && failures < give_up_after; ++k) {
-    const Real r = pending_[k];
-    bool ok = false;
-    for (int attempt = 0; attempt < spec_.max_attempts && !ok; ++attempt) {
-      const Vec3 x = slab_.sample(rng_, r);
-      if (!grid.overlaps(x, r) && walls.clear(x, r)) {
-        grid.add(x, r);
-        position.push_back(x);
-        radius.push_back(r);
-        inserted_mass_ += mass_of(r);
-        ++inserted_count_;
-        ok = true;
-      }
-    }
-    if (ok) {
-      failures = 0;
-    } else {
-      ++failures;
-      still_pending.push_back(r);
-    }
+  const std::size_t before = radius.size();
+  place_pending(pending_, slab_, spec_.max_attempts, rng_, grid, walls, position, radius);
+  for (std::size_t k = before; k < radius.size(); ++k) {
+    inserted_mass_ += mass_of(radius[k]);
+    ++inserted_count_;
   }
-  still_pending.insert(still_pending.end(), pending_.begin() + k, pending_.end());
-  pending_.swap(still_pending);
 }
 
 Real StreamInserter::requested_mass(Real time) const {

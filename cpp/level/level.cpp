@@ -18,7 +18,9 @@ namespace grainscale {
 Level::Level(const Domain& domain, Communicator comm)
     : domain_(domain),
       law_(make_contact_law("hertz", "none", ContactSettings{})),
-      comm_(std::move(comm)) {}
+      comm_(std::move(comm)) {
+  if (comm_.parallel()) balance_every_ = 500;
+}
 
 namespace {
 
@@ -423,10 +425,15 @@ void Level::rebuild() {
   const Real cutoff = 2 * r_max + skin_;
   const Real size_ratio = r_max / r_min;
   if (comm_.parallel()) {
+    // Balanced slabs keep a margin over the cut-off: it grows when larger particles arrive.
+    const Real min_width = 1.25 * cutoff;
     if (balance_every_ > 0 && step_ - balanced_at_step_ >= balance_every_) {
-      if (imbalance(rank_counts()) > balance_threshold_) balance_cuts(cutoff);
+      const std::vector<Real> work = particle_work();
+      if (imbalance(work) > balance_threshold_) balance_cuts(min_width, work);
       balanced_at_step_ = step_;
     }
+    // A cut-off grown past a balanced slab's width: move the cuts (the same on every rank).
+    if (!(decomposition_.narrowest_slab() >= cutoff)) balance_cuts(min_width, particle_work());
     const Real narrowest = decomposition_.narrowest_slab();
     if (!(narrowest >= cutoff)) {
       std::ostringstream c;
@@ -500,6 +507,7 @@ void Level::compute_forces(const Law& law) {
     w.force.setZero();
     w.torque.setZero();
   }
+  for (const CouplingForces& c : couplings_) c.apply(ps_, domain_);
   if constexpr (kStats) stats_.clear();
   accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
   {

@@ -19,6 +19,8 @@
 #include "contact/contact_law.hpp"
 #include "contact/contact_stats.hpp"
 #include "contact/wall_loop.hpp"
+#include "coupling/coupling_forces.hpp"
+#include "coupling/flux_inserter.hpp"
 #include "geometry/wall.hpp"
 #include "insert/outlet.hpp"
 #include "insert/pack.hpp"
@@ -82,11 +84,15 @@ class Level {
   // Default: chosen from the box shape (choose_processor_grid).
   void set_processor_grid(const std::array<int, 3>& grid);
   const Decomposition& decomposition();
-  // Collective. Moves the cuts so that the slabs hold equal particle counts (particles move at
-  // the next list build); returns the imbalance (largest rank count / mean) before and after.
+  // Collective. Moves the cuts so that the slabs hold equal shares of the work (particles move at
+  // the next list build); returns the imbalance (largest rank's work / mean) before and after.
+  // The work of a particle is 1 + 0.8 per list entry + 2 per touching contact (of those it
+  // stores: each pair counts once), a deterministic estimate (level_parallel.cpp), so balanced
+  // runs stay reproducible.
   std::pair<Real, Real> balance();
   // Collective when set: at list builds at least `every` steps apart, balance() when the
-  // imbalance exceeds `threshold`. every = 0 switches it off.
+  // imbalance exceeds `threshold`. every = 0 switches it off. Parallel runs start with
+  // every = 500 steps and threshold 1.05.
   void set_auto_balance(std::int64_t every, Real threshold);
   // Collective: owned particles on every rank (in rank order), and their sum.
   std::vector<std::int64_t> rank_counts() const;
@@ -155,7 +161,17 @@ class Level {
   std::int64_t remove_particles(const std::vector<GlobalId>& ids);
   // Smallest Rayleigh time (s) of the particles the streams may insert (inf without streams).
   Real smallest_insertion_rayleigh_time() const;
+  // Collective: places what the inserters owe (each its scheduled particles, in order; every
+  // rank the same particles, each keeps its own) with their velocity and spin; returns the
+  // number placed.
+  std::int64_t insert_flux(std::vector<FluxInserter>& inserters);
   // --- end insertion and outlets ---
+
+  // --- hierarchy coupling (coupling/) ---
+  // Forces from another level, applied every step after the force reset; returns the index.
+  int add_coupling(CouplingForces forces);
+  CouplingForces& coupling(int index);
+  // --- end hierarchy coupling ---
 
  private:
   template <bool kPlanar, class Law>
@@ -170,9 +186,13 @@ class Level {
   bool owns(const Vec3& x) const { return decomposition_.owner(x, domain_) == comm_.rank(); }
   // Drops owned particles outside the closed sides of the box (counted as lost).
   void drop_lost();
-  // Cut positions for equal counts along every split axis, slabs at least `min_width` wide.
-  void balance_cuts(Real min_width);
-  Real imbalance(const std::vector<std::int64_t>& counts) const;
+  // Work of every owned particle (see balance()), from the carried histories: requires lists
+  // invalid (histories saved).
+  std::vector<Real> particle_work() const;
+  // Cut positions for equal work along every split axis, slabs at least `min_width` wide.
+  void balance_cuts(Real min_width, const std::vector<Real>& work);
+  // Largest rank's total work / mean; collective.
+  Real imbalance(const std::vector<Real>& work) const;
   // Every rank's nearby spheres of an insertion box, on every rank (OccupancyGrid input).
   SphereSet gather_nearby(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real& r_old) const;
   // After a force evaluation: the wall loads (and the contact statistics) summed over the ranks.
@@ -218,8 +238,8 @@ class Level {
   Decomposition decomposition_;
   std::array<int, 3> requested_grid_{0, 0, 0};  // 0: choose from the box shape
   bool decomposed_ = false;
-  std::int64_t balance_every_ = 0;
-  Real balance_threshold_ = 1.1;
+  std::int64_t balance_every_ = 0;  // set in the constructor for parallel runs
+  Real balance_threshold_ = 1.05;
   std::int64_t balanced_at_step_ = 0;
   bool any_servo_ = false;
   std::vector<Vec3> x_at_build_;
@@ -248,6 +268,7 @@ class Level {
   void run_streams();
   std::vector<StreamInserter> streams_;
   std::vector<Outlet> outlets_;
+  std::vector<CouplingForces> couplings_;
   // --- end insertion and outlets ---
 };
 

@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/errors.hpp"
+#include "coupling/exchange_grid.hpp"
 #include "integrate/time_step.hpp"
 #include "level/level.hpp"
 
@@ -222,6 +223,7 @@ void Level::apply_outlets() {
   for (Outlet& outlet : outlets_) {
     if (!outlet.due(step_)) continue;
     const Region& region = outlet.spec().region;
+    const ExchangeGrid* keep = outlet.spec().keep.get();
     // Most particles are far from an outlet: a bounding-box test first (this runs every step).
     Vec3 lo, hi;
     region.bounds(lo, hi);
@@ -229,8 +231,9 @@ void Level::apply_outlets() {
     Real mass = 0;
     for (Index i = 0; i < ps_.n_owned(); ++i) {
       const Vec3 x = wrapped(domain_, ps_.position[i]);
-      if (x[0] < lo[0] || x[1] < lo[1] || x[2] < lo[2] || x[0] > hi[0] || x[1] > hi[1] ||
-          x[2] > hi[2] || !region.contains(x))
+      if (keep ? keep->contains(x)
+               : (x[0] < lo[0] || x[1] < lo[1] || x[2] < lo[2] || x[0] > hi[0] || x[1] > hi[1] ||
+                  x[2] > hi[2] || !region.contains(x)))
         continue;
       if (!taken.empty() && taken[i]) continue;
       if (outlets_.size() > 1) {
@@ -254,6 +257,59 @@ void Level::apply_outlets() {
     ++k;
   }
   if (!gone.empty()) remove_owned(gone);
+}
+
+std::int64_t Level::insert_flux(std::vector<FluxInserter>& inserters) {
+  // One occupancy grid over every shell with particles waiting (the same on every rank).
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  Real max_new = 0;
+  for (const FluxInserter& f : inserters) {
+    if (!f.waiting()) continue;
+    Vec3 a, b;
+    f.shell().bounds(a, b);
+    lo = lo.cwiseMin(a);
+    hi = hi.cwiseMax(b);
+    max_new = std::max(max_new, f.max_radius());
+  }
+  if (!(max_new > 0)) return 0;
+  Real r_old = 0;
+  const SphereSet present = gather_nearby(lo, hi, max_new, r_old);
+  OccupancyGrid grid(lo, hi, max_new, r_old, present, domain_);
+  const WallClearance walls(walls_, lo, hi, max_new);
+  std::int64_t placed = 0;
+  std::vector<Vec3> x;
+  std::vector<Real> r;
+  for (FluxInserter& f : inserters) {
+    if (!f.waiting()) continue;
+    x.clear();
+    r.clear();
+    f.place(grid, walls, x, r);
+    if (r.empty()) continue;
+    const Index n = static_cast<Index>(r.size());
+    std::vector<Real> flat(3 * n), v(3 * n), w(3 * n);
+    for (Index k = 0; k < n; ++k)
+      for (int a = 0; a < 3; ++a) {
+        flat[3 * k + a] = x[k][a];
+        v[3 * k + a] = f.velocity()[a];
+        w[3 * k + a] = f.spin()[a];
+      }
+    const std::vector<std::int32_t> mat(n, f.material());
+    add_particles(n, flat.data(), v.data(), w.data(), r.data(), mat.data());
+    placed += n;
+  }
+  return placed;
+}
+
+int Level::add_coupling(CouplingForces forces) {
+  couplings_.push_back(std::move(forces));
+  forces_valid_ = false;
+  return static_cast<int>(couplings_.size()) - 1;
+}
+
+CouplingForces& Level::coupling(int index) {
+  if (index < 0 || index >= static_cast<int>(couplings_.size()))
+    throw_invalid("coupling index", "in [0, " + std::to_string(couplings_.size()) + ")", index);
+  return couplings_[index];
 }
 
 void Level::run_streams() {

@@ -74,58 +74,92 @@ std::vector<std::int64_t> Level::rank_counts() const {
   return counts;
 }
 
-Real Level::imbalance(const std::vector<std::int64_t>& counts) const {
-  std::int64_t total = 0, most = 0;
-  for (std::int64_t c : counts) {
-    total += c;
-    most = std::max(most, c);
+std::vector<Real> Level::particle_work() const {
+  // Per step a particle costs its integration, wall loop and list upkeep (1, about 40 ns on the
+  // development VM), a distance test per list entry it stores (0.8: a cache miss for the
+  // partner's data) and a force evaluation per touching contact (2), as timed per rank on the
+  // 200k 'settle' case (bench/SCALING.md).
+  std::vector<Real> work(ps_.n_owned(), 1);
+  auto entries = [](const ContactList& list, Index row) -> Real {
+    return row >= 0 && static_cast<std::size_t>(row) + 1 < list.first.size()
+               ? list.first[row + 1] - list.first[row]
+               : 0;
+  };
+  for (Index i = 0; i < ps_.n_owned(); ++i) {
+    const Index row = i < static_cast<Index>(origin_.size()) ? origin_[i] : -1;
+    work[i] += 0.8 * (entries(pairs_, row) + entries(wall_contacts_, row)) +
+               2.0 * (pair_carry_.row_size(row) + wall_carry_.row_size(row));
   }
-  if (total == 0) return 1;
-  return static_cast<Real>(most) * static_cast<Real>(counts.size()) / static_cast<Real>(total);
+  return work;
 }
 
-void Level::balance_cuts(Real min_width) {
+Real Level::imbalance(const std::vector<Real>& work) const {
+  Real mine = 0;
+  for (Real w : work) mine += w;
+  std::vector<char> bytes(sizeof mine);
+  std::memcpy(bytes.data(), &mine, sizeof mine);
+  const std::vector<char> all = comm_.allgather(bytes, nullptr);
+  std::vector<Real> totals(all.size() / sizeof mine);
+  std::memcpy(totals.data(), all.data(), all.size());
+  Real total = 0, most = 0;
+  for (Real t : totals) {
+    total += t;
+    most = std::max(most, t);
+  }
+  if (!(total > 0)) return 1;
+  return most * static_cast<Real>(totals.size()) / total;
+}
+
+void Level::balance_cuts(Real min_width, const std::vector<Real>& work) {
   for (int a = 0; a < 3; ++a) {
     const int n = decomposition_.grid[a];
     if (n == 1) continue;
     const Real lo = domain_.lo[a], hi = domain_.hi[a];
-    // Histogram of the centres along the axis, 256 bins per slab, summed over the ranks.
-    std::vector<std::int64_t> counts(256 * static_cast<std::size_t>(n), 0);
-    const Real scale = static_cast<Real>(counts.size()) / (hi - lo);
+    // Histogram of the work along the axis, 256 bins per slab, summed over the ranks.
+    std::vector<Real> weights(256 * static_cast<std::size_t>(n), 0);
+    const Real scale = static_cast<Real>(weights.size()) / (hi - lo);
     for (Index i = 0; i < ps_.n_owned(); ++i) {
       Real x = ps_.position[i][a];
       if (domain_.periodic[a]) x -= (hi - lo) * std::floor((x - lo) / (hi - lo));
       const auto b = static_cast<std::int64_t>(std::floor((x - lo) * scale));
-      ++counts[std::clamp<std::int64_t>(b, 0, static_cast<std::int64_t>(counts.size()) - 1)];
+      weights[std::clamp<std::int64_t>(b, 0, static_cast<std::int64_t>(weights.size()) - 1)] +=
+          work[i];
     }
-    comm_.sum_in_place(counts);
-    decomposition_.cuts[a] = balanced_cuts(counts, lo, hi, n, min_width);
+    comm_.sum_in_place(weights);
+    decomposition_.cuts[a] = balanced_cuts(weights, lo, hi, n, min_width);
   }
 }
 
 std::pair<Real, Real> Level::balance() {
   ensure_decomposition();
-  const Real before = imbalance(rank_counts());
-  if (!comm_.parallel()) return {before, before};
-  Real r_max = 0;
-  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
-  const Real cutoff = 2 * comm_.max(r_max) + skin_;
+  if (!comm_.parallel()) return {1, 1};
   if (lists_valid_) save_histories();
   lists_valid_ = false;  // the particles move to their new ranks at the next list build
   ps_.clear_ghosts();
   ghosts_.clear();
-  balance_cuts(cutoff);
+  const std::vector<Real> work = particle_work();
+  const Real before = imbalance(work);
+  Real r_max = 0;
+  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
+  const Real cutoff = 2 * comm_.max(r_max) + skin_;
+  balance_cuts(1.25 * cutoff, work);  // the margin of rebuild()
   balanced_at_step_ = step_;
-  std::vector<std::int64_t> after(comm_.size(), 0);
-  for (Index i = 0; i < ps_.n_owned(); ++i) ++after[decomposition_.owner(ps_.position[i], domain_)];
+  std::vector<Real> after(comm_.size(), 0);
+  for (Index i = 0; i < ps_.n_owned(); ++i)
+    after[decomposition_.owner(ps_.position[i], domain_)] += work[i];
   comm_.sum_in_place(after);
-  return {before, imbalance(after)};
+  Real total = 0, most = 0;
+  for (Real t : after) {
+    total += t;
+    most = std::max(most, t);
+  }
+  return {before, total > 0 ? most * comm_.size() / total : 1};
 }
 
 void Level::set_auto_balance(std::int64_t every, Real threshold) {
   if (every < 0) throw_invalid("Simulation.balance.every", "a non-negative step count", every);
   if (!(threshold >= 1) || !std::isfinite(threshold))
-    throw_invalid("Simulation.balance.threshold", ">= 1 (largest rank count / mean)", threshold);
+    throw_invalid("Simulation.balance.threshold", ">= 1 (largest rank's work / mean)", threshold);
   balance_every_ = every;
   balance_threshold_ = threshold;
   balanced_at_step_ = step_;

@@ -109,6 +109,22 @@ Real Communicator::max(Real v) const {
 #endif
 }
 
+void Communicator::max_in_place(std::vector<Real>& v) const {
+  for (Real& x : v)
+    if (std::isnan(x)) x = std::numeric_limits<Real>::infinity();
+  if (!parallel() || v.empty()) return;
+#ifdef GRAINSCALE_HAVE_MPI
+  MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_MAX,
+                handle_->comm);
+#endif
+}
+
+void Communicator::min_in_place(std::vector<Real>& v) const {
+  for (Real& x : v) x = std::isnan(x) ? std::numeric_limits<Real>::infinity() : -x;
+  max_in_place(v);
+  for (Real& x : v) x = -x;
+}
+
 Real Communicator::min(Real v) const {
   if (std::isnan(v)) v = -std::numeric_limits<Real>::infinity();
   return -max(-v);

@@ -40,6 +40,9 @@ class Communicator {
   void sum_in_place(std::vector<std::int64_t>& v) const;
   Real max(Real v) const;
   Real min(Real v) const;
+  // Element-wise extremes (exact in any order; NaN counts as the extreme).
+  void max_in_place(std::vector<Real>& v) const;
+  void min_in_place(std::vector<Real>& v) const;
   std::int64_t max(std::int64_t v) const;
   bool any(bool v) const { return max(static_cast<std::int64_t>(v)) != 0; }
   bool all(bool v) const { return !any(!v); }

@@ -82,23 +82,23 @@ std::array<int, 3> choose_processor_grid(const Vec3& length, int ranks, int dime
   return best;
 }
 
-std::vector<Real> balanced_cuts(const std::vector<std::int64_t>& counts, Real lo, Real hi, int n,
+std::vector<Real> balanced_cuts(const std::vector<Real>& counts, Real lo, Real hi, int n,
                                 Real min_width) {
   std::vector<Real> cuts(n + 1);
   const std::size_t bins = counts.size();
-  std::int64_t total = 0;
-  for (std::int64_t c : counts) total += c;
+  Real total = 0;
+  for (Real c : counts) total += c;
   const Real bin = (hi - lo) / static_cast<Real>(std::max<std::size_t>(bins, 1));
   // Equal shares: cut k where the cumulative count reaches k total / n (linear within a bin).
   std::size_t b = 0;
-  std::int64_t below = 0;  // particles in bins [0, b)
+  Real below = 0;  // weight in bins [0, b)
   for (int k = 0; k <= n; ++k) {
-    if (total == 0 || k == 0 || k == n) {
+    if (!(total > 0) || k == 0 || k == n) {
       cuts[k] = lo + (hi - lo) * k / n;
       continue;
     }
-    const Real target = static_cast<Real>(total) * k / n;
-    while (b < bins && static_cast<Real>(below + counts[b]) < target) below += counts[b++];
+    const Real target = total * k / n;
+    while (b < bins && below + counts[b] < target) below += counts[b++];
     const Real inside = b < bins && counts[b] > 0 ? (target - below) / counts[b] : 0;
     cuts[k] = lo + (static_cast<Real>(b) + inside) * bin;
   }

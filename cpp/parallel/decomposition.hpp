@@ -45,10 +45,10 @@ struct Decomposition {
 // pz = 1 in the 2-D mode. Among equal surfaces a split along z is preferred.
 std::array<int, 3> choose_processor_grid(const Vec3& length, int ranks, int dimension);
 
-// Cut positions lo = c_0 < ... < c_n = hi putting equal shares of the histogram `counts` (bins of
-// equal width over [lo, hi]) in each of n slabs, each at least `min_width` wide (as close as
+// Cut positions lo = c_0 < ... < c_n = hi putting equal shares of the histogram `weights` (bins
+// of equal width over [lo, hi]) in each of n slabs, each at least `min_width` wide (as close as
 // possible to the equal shares when that constraint binds). Uniform cuts for an empty histogram.
-std::vector<Real> balanced_cuts(const std::vector<std::int64_t>& counts, Real lo, Real hi, int n,
+std::vector<Real> balanced_cuts(const std::vector<Real>& weights, Real lo, Real hi, int n,
                                 Real min_width);
 
 }  // namespace grainscale

@@ -6,8 +6,9 @@ laws in :mod:`grainscale.contact`.
 
 from __future__ import annotations
 
-from . import contact, dist, geometry, insert, io, scaling, timestep
+from . import contact, dist, fields, geometry, insert, io, parallel, scaling, timestep
 from .geometry import Box, Plane, Rectangle
+from .hierarchy import Exchange, Hierarchy, Level
 from .materials import Material
 from .simulation import ParticleView, Simulation
 
@@ -15,6 +16,9 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Box",
+    "Exchange",
+    "Hierarchy",
+    "Level",
     "Material",
     "ParticleView",
     "Plane",
@@ -22,9 +26,11 @@ __all__ = [
     "Simulation",
     "contact",
     "dist",
+    "fields",
     "geometry",
     "insert",
     "io",
+    "parallel",
     "scaling",
     "timestep",
 ]

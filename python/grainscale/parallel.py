@@ -38,6 +38,16 @@ def launched_ranks() -> int:
     return 1
 
 
+def world_rank() -> int:
+    """This process's rank in ``MPI.COMM_WORLD`` when started by an MPI launcher, else 0 (for
+    scripts that write their own files or print from one rank only)."""
+    if launched_ranks() <= 1:
+        return 0
+    from mpi4py import MPI
+
+    return int(MPI.COMM_WORLD.Get_rank())
+
+
 def resolve(comm: Any) -> Any:
     """The communicator a simulation runs on: an mpi4py communicator of more than one rank, or
     None for a serial run. Raises ValueError for anything else."""

@@ -99,7 +99,7 @@ class Simulation:
             recorded at the end of each run in ``thermo_log``).
         quiet: do not print thermo lines.
         record_contacts: keep a record of every touching contact at the end of each run, for
-            ``contacts()`` (72 bytes per contact; off by default).
+            ``contacts()`` (80 bytes per contact; off by default).
         dimension: 3 (spheres) or 2 (discs of unit thickness, 1 m, for plane tests): centres
             lie in the plane z = ``plane_z`` (the domain's mid-height); z, v_z, w_x and w_y stay
             frozen (velocities zero), m = rho pi r^2 x 1 m, I = m r^2 / 2. Contact laws are the
@@ -545,6 +545,17 @@ class Simulation:
             local = {name: np.concatenate([q[name] for q in parts]) for name in names}
         order = np.argsort(local["id"], kind="stable")
         return {name: a[order] for name, a in local.items()}
+
+    def sum_over_ranks(self, value: Any) -> Any:
+        """Collective: ``value`` (a number or numpy array, e.g. a sum over this rank's
+        ``particles()``) summed over the ranks, on every rank; ``value`` itself when serial."""
+        if self._comm is None:
+            return value
+        parts = self._comm.allgather(value)
+        total = parts[0]
+        for part in parts[1:]:  # in rank order: every rank gets the same bits
+            total = total + part
+        return total
 
     def decomposition(self) -> dict[str, Any]:
         """Collective: processor grid, this rank's grid coordinates, the cut positions per axis

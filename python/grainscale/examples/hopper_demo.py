@@ -257,9 +257,9 @@ class HopperProbe:
     def write(self, sim: gs.Simulation) -> None:
         with sim.particles(writable=False) as p:
             below = p.position[:, 2] < self.outlet_z
-            m_out = float(p.mass[below].sum())
-            m_in = float(p.mass[~below].sum())
-            n_out = int(np.count_nonzero(below))
+            local = np.array([p.mass[below].sum(), p.mass[~below].sum(), np.count_nonzero(below)])
+        m_out, m_in, n_out = sim.sum_over_ranks(local)  # this rank's particles, then all
+        n_out = int(n_out)
         load = -float(sim.wall_force(self.hopper_wall)[2])  # particles push the wall down
         self.rows.append(
             (
@@ -275,7 +275,7 @@ class HopperProbe:
         )
         self._last_step = sim.step
         self._next_time = (math.floor(sim.time / self.every + 1e-6) + 1) * self.every
-        if self.print_every and (len(self.rows) - 1) % self.print_every == 0:
+        if self.print_every and (len(self.rows) - 1) % self.print_every == 0 and sim.rank == 0:
             if len(self.rows) == 1:
                 tqdm.write(
                     f"{'step':>8} {'time/s':>7} {'in hopper/g':>11} {'discharged/g':>12} "
@@ -328,15 +328,17 @@ def run(
     case = case if case is not None else HopperCase()
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
-    say = print if verbose else (lambda *args, **kwargs: None)
+    # Under mpirun every rank runs this; rank 0 prints and writes the files.
+    lead = gs.parallel.world_rank() == 0
+    say = print if verbose and lead else (lambda *args, **kwargs: None)
     t_start = time.perf_counter()
 
     if stl is None:
         stl = PACKAGED_STL
-        if not stl.is_file():
+        if not stl.is_file() and lead:
             stl = write_hopper_stl(out / "hopper.stl")
     stl = Path(stl)
-    if stl.resolve() != (out / "hopper.stl").resolve():
+    if lead and stl.resolve() != (out / "hopper.stl").resolve():
         shutil.copyfile(stl, out / "hopper.stl")
 
     glass = gs.Material(
@@ -405,7 +407,8 @@ def run(
     print_every = max(1, round(case.thermo_every / case.sample_every)) if verbose else None
     probe = HopperProbe(geo.outlet_z, wall_hopper, case.sample_every, print_every)
     sim.output(probe)
-    gs.io.write_vtp_mesh(out / "bin.vtp", *_box_surface(lo, hi))
+    if lead:
+        gs.io.write_vtp_mesh(out / "bin.vtp", *_box_surface(lo, hi))
 
     mm = 1e3
     say(
@@ -437,7 +440,7 @@ def run(
     advance(sim.time + case.settle)
     t_open = sim.time
     with sim.particles(writable=False) as p:
-        inventory = float(p.mass[p.position[:, 2] >= geo.outlet_z].sum())
+        inventory = float(sim.sum_over_ranks(p.mass[p.position[:, 2] >= geo.outlet_z].sum()))
     travel = 2 * g + d
     opened = sim.time < case.duration
     if opened:
@@ -451,23 +454,27 @@ def run(
     wall_clock = time.perf_counter() - t_run0
 
     hist = probe.array()
-    np.savetxt(
-        out / "history.csv",
-        hist,
-        delimiter=",",
-        header=",".join(HopperProbe.columns),
-        comments="",
-        fmt=["%.6g", "%.6e", "%.6e", "%d", "%d", "%.6e", "%d", "%.6e"],
-    )
+    if lead:
+        np.savetxt(
+            out / "history.csv",
+            hist,
+            delimiter=",",
+            header=",".join(HopperProbe.columns),
+            comments="",
+            fmt=["%.6g", "%.6e", "%.6e", "%d", "%d", "%.6e", "%d", "%.6e"],
+        )
     after = hist[:, 0] >= t_open
     w = discharge_rate(hist[after, 0], hist[after, 2], inventory) if opened else math.nan
     plot = out / "hopper.png"
-    _plot(plot, hist, case, t_open if opened else None, inventory, w)
+    if lead:
+        _plot(plot, hist, case, t_open if opened else None, inventory, w)
 
     status = stream.status()
     with sim.particles(writable=False) as p:
         below = p.position[:, 2] < geo.outlet_z
-        m_out, n_out = float(p.mass[below].sum()), int(np.count_nonzero(below))
+        local = np.array([p.mass[below].sum(), np.count_nonzero(below)])
+    m_out, n_out = sim.sum_over_ranks(local)
+    m_out, n_out = float(m_out), int(n_out)
     walls_pvd = out / "particles_walls.pvd"
     result: dict[str, Any] = dict(
         output=out,
@@ -492,7 +499,8 @@ def run(
         snapshots=len(vtk.files),
     )
     text = _summary(case, geo, stl, result, sim, time.perf_counter() - t_start)
-    (out / "summary.md").write_text(text)
+    if lead:
+        (out / "summary.md").write_text(text)
     say("")
     say(text, end="")
     say(f"Output directory: {out.resolve()}")
@@ -535,7 +543,8 @@ def _summary(
         f"- at the end: {r['discharged']} particles ({r['discharged_mass'] * 1e3:.1f} g) "
         f"discharged, {sim.num_particles - r['discharged']} still in the hopper",
         f"- wall-clock: {r['wall_clock']:.1f} s in Simulation.run ({total:.1f} s with set-up "
-        f"and output); throughput {r['particle_steps_per_second']:.3g} particle-steps/s",
+        f"and output) on {sim.ranks} rank(s); throughput {r['particle_steps_per_second']:.3g} "
+        "particle-steps/s",
         f"- ParaView: {r['pvd']} ({r['snapshots']} snapshots), walls: {r['walls_pvd']}, box: "
         f"{r['output'] / 'bin.vtp'}",
         f"- plot: {r['plot']}; time series: {r['history']}",

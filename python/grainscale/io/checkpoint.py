@@ -57,16 +57,85 @@ def _write(path: str | os.PathLike[str], states: list[dict[str, Any]], extra: An
         f.attrs["format"] = FORMAT
         f.attrs["version"] = VERSION
         f.attrs["grainscale"] = __version__
-        f.attrs["ranks"] = len(states)
-        f.attrs["python_state"] = json.dumps(extra)
-        for rank, state in enumerate(states):
-            group = f.create_group(f"rank_{rank}")
-            for key, value in state.items():
-                if key.startswith("texts/"):
-                    group.attrs[key] = value
-                else:
-                    group.create_dataset(key, data=np.asarray(value))
+        _write_simulation(f, states, extra)
     os.replace(tmp, path)
+
+
+def _write_simulation(group: Any, states: list[dict[str, Any]], extra: Any) -> None:
+    """One simulation's rank parts and Python state into an HDF5 group."""
+    group.attrs["ranks"] = len(states)
+    group.attrs["python_state"] = json.dumps(extra)
+    for rank, state in enumerate(states):
+        part = group.create_group(f"rank_{rank}")
+        for key, value in state.items():
+            if key.startswith("texts/"):
+                part.attrs[key] = value
+            else:
+                part.create_dataset(key, data=np.asarray(value))
+
+
+def save_hierarchy(sims: list[Any], path: str | os.PathLike[str], coupling_state: str) -> None:
+    """Collective: the levels of a hierarchy (groups ``level_<k>``, each like a simulation's
+    checkpoint) and the hierarchy's coupling state (JSON text) in one file."""
+    import h5py
+
+    from .. import __version__
+
+    parts = []
+    for sim in sims:
+        state = sim._level.save_state()
+        comm = sim.comm
+        parts.append(
+            ([state] if comm is None else comm.gather(state, root=0), sim._checkpoint_extra())
+        )
+    error: BaseException | None = None
+    if sims[0].rank == 0:
+        try:
+            tmp = os.fspath(path) + ".tmp"
+            with h5py.File(tmp, "w") as f:
+                f.attrs["format"] = FORMAT
+                f.attrs["version"] = VERSION
+                f.attrs["grainscale"] = __version__
+                f.attrs["levels"] = len(sims)
+                f.attrs["hierarchy_state"] = coupling_state
+                for k, (states, extra) in enumerate(parts):
+                    _write_simulation(f.create_group(f"level_{k}"), states, extra)
+            os.replace(tmp, path)
+        except Exception as err:
+            error = err
+    parallel.agree(sims[0].comm, error)
+
+
+def load_hierarchy(sims: list[Any], path: str | os.PathLike[str]) -> str:
+    """Collective: restores every level from a file of save_hierarchy; returns the coupling
+    state text."""
+    error: BaseException | None = None
+    text = ""
+    loaded: list[tuple[list[dict[str, Any]], bool, Any]] = []
+    try:
+        f = _open(path)
+        with f:
+            if int(f.attrs.get("levels", -1)) != len(sims):
+                raise ValueError(
+                    f"checkpoint holds {f.attrs.get('levels')!r} levels, this hierarchy has "
+                    f"{len(sims)}"
+                )
+            text = str(f.attrs["hierarchy_state"])
+            for k, sim in enumerate(sims):
+                grid = tuple(sim._level.decomposition()["grid"])
+                loaded.append(_read_simulation(f[f"level_{k}"], sim.rank, sim.ranks, grid, path))
+    except KeyError as err:
+        error = ValueError(f"checkpoint {path!r} is not a hierarchy checkpoint ({err})")
+    except Exception as err:
+        error = err
+    parallel.agree(sims[0].comm, error)
+    for sim, (parts, exact, extra) in zip(sims, loaded, strict=True):
+        sim._restore_checkpoint_extra(extra)
+        if exact:
+            sim._level.load_state(parts[0])
+        else:
+            sim._level.load_redistributed(parts)
+    return text
 
 
 def load(sim: Any, path: str | os.PathLike[str]) -> None:
@@ -94,12 +163,7 @@ def load(sim: Any, path: str | os.PathLike[str]) -> None:
         sim._level.load_redistributed(parts)
 
 
-def _read(
-    path: str | os.PathLike[str], rank: int, ranks: int, grid: tuple[int, ...]
-) -> tuple[list[dict[str, Any]], bool, Any]:
-    """The rank parts this rank needs — its own when the file was written on the same ranks
-    and processor grid (exact restart), else all of them — whether that is exact, and the Python
-    state."""
+def _open(path: str | os.PathLike[str]) -> Any:
     import h5py
 
     try:
@@ -108,24 +172,39 @@ def _read(
         raise ValueError(
             f"checkpoint.path must be a readable HDF5 file, got {path!r} ({err})"
         ) from None
-    with f:
-        if f.attrs.get("format") != FORMAT:
-            raise ValueError(f"checkpoint.path is not a grainscale checkpoint: {path!r}")
-        if int(f.attrs.get("version", -1)) != VERSION:
-            raise ValueError(
-                f"checkpoint version must be {VERSION}, got {f.attrs.get('version')!r}"
-            )
-        saved = int(f.attrs.get("ranks", 0))
-        groups = [f.get(f"rank_{r}") for r in range(saved)]
-        if saved < 1 or any(g is None for g in groups):
-            raise ValueError(f"checkpoint {path!r} is corrupt: rank groups missing")
-        decomposition = groups[0].get("ints/decomposition")
-        if decomposition is None or len(decomposition) != 5:
-            raise ValueError(f"checkpoint {path!r} is corrupt: no decomposition")
-        exact = saved == ranks and tuple(int(g) for g in decomposition[1:4]) == grid
-        parts = [_read_group(groups[rank])] if exact else [_read_group(g) for g in groups]
-        extra = json.loads(f.attrs["python_state"])
-    return parts, exact, extra
+    if f.attrs.get("format") != FORMAT:
+        f.close()
+        raise ValueError(f"checkpoint.path is not a grainscale checkpoint: {path!r}")
+    if int(f.attrs.get("version", -1)) != VERSION:
+        version = f.attrs.get("version")
+        f.close()
+        raise ValueError(f"checkpoint version must be {VERSION}, got {version!r}")
+    return f
+
+
+def _read(
+    path: str | os.PathLike[str], rank: int, ranks: int, grid: tuple[int, ...]
+) -> tuple[list[dict[str, Any]], bool, Any]:
+    with _open(path) as f:
+        return _read_simulation(f, rank, ranks, grid, path)
+
+
+def _read_simulation(
+    group: Any, rank: int, ranks: int, grid: tuple[int, ...], path: Any
+) -> tuple[list[dict[str, Any]], bool, Any]:
+    """The rank parts this rank needs — its own when the group was written on the same ranks
+    and processor grid (exact restart), else all of them — whether that is exact, and the Python
+    state."""
+    saved = int(group.attrs.get("ranks", 0))
+    groups = [group.get(f"rank_{r}") for r in range(saved)]
+    if saved < 1 or any(g is None for g in groups):
+        raise ValueError(f"checkpoint {path!r} is corrupt: rank groups missing")
+    decomposition = groups[0].get("ints/decomposition")
+    if decomposition is None or len(decomposition) != 5:
+        raise ValueError(f"checkpoint {path!r} is corrupt: no decomposition")
+    exact = saved == ranks and tuple(int(g) for g in decomposition[1:4]) == grid
+    parts = [_read_group(groups[rank])] if exact else [_read_group(g) for g in groups]
+    return parts, exact, json.loads(group.attrs["python_state"])
 
 
 def _read_group(group: Any) -> dict[str, Any]:

@@ -360,6 +360,9 @@ class VTK:
     (int32) and ``mass`` (kg). In ParaView open the .pvd and apply Glyph (Sphere, scale by
     ``radius``, scale factor 2) to see the grains.
 
+    ``level``: the level of a :class:`~grainscale.Hierarchy` the simulation is (written as an
+    int32 ``level`` array, to colour the levels in ParaView).
+
     Under MPI every rank writes its particles as ``<prefix>_<step:08d>_r<rank>.vtp`` (with a
     ``rank`` array) and rank 0 writes the parallel index ``<prefix>_<step:08d>.pvtp``, which
     the .pvd lists; mesh walls are written by rank 0.
@@ -383,7 +386,11 @@ class VTK:
         prefix: str = "particles",
         binary: bool = True,
         appended: bool = False,
+        level: int | None = None,
     ) -> None:
+        if level is not None and (isinstance(level, bool) or not isinstance(level, int)):
+            raise ValueError(f"VTK.level must be an integer or None, got {level!r}")
+        self.level = level
         if (every is None) == (every_steps is None):
             raise ValueError(
                 "VTK needs exactly one of every (s) or every_steps, "
@@ -509,6 +516,8 @@ class VTK:
             point_data.update({"id": p.id, "material": p.material, "mass": p.mass})
             if ranks > 1:
                 point_data["rank"] = np.full(len(p), rank, dtype=np.int32)
+            if self.level is not None:
+                point_data["level"] = np.full(len(p), self.level, dtype=np.int32)
             write_vtp(path, p.position, point_data, binary=self.binary, appended=self.appended)
             if ranks > 1 and rank == 0:
                 index = f"{self.prefix}_{step:08d}.pvtp"

@@ -1,0 +1,55 @@
+#include "coupling/coupling_forces.hpp"
+
+#include <cmath>
+
+#include "core/errors.hpp"
+
+namespace grainscale {
+
+CouplingForces::CouplingForces(std::shared_ptr<const ExchangeGrid> grid, Real layer, Real fade)
+    : grid_(std::move(grid)), layer_(layer), fade_(fade) {
+  if (!(layer > 0) || !std::isfinite(layer))
+    throw_invalid("Exchange.layer", "positive and finite (m)", layer);
+  if (!(fade > 0) || !(fade <= layer))
+    throw_invalid("Exchange.fade", "positive and at most the layer thickness (m)", fade);
+}
+
+void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
+  const FieldGrid& g = grid_->grid();
+  const bool feedback = !acceleration.empty();
+  const bool push = !pressure.empty();
+  if (!feedback && !push) return;
+  const Vec3 lo = g.origin, hi = g.upper();
+  for (Index i = 0; i < ps.n_owned(); ++i) {
+    Vec3 x = ps.position[i];
+    for (int a = 0; a < 3; ++a)
+      if (domain.periodic[a]) {
+        const Real len = domain.hi[a] - domain.lo[a];
+        x[a] -= len * std::floor((x[a] - domain.lo[a]) / len);
+      }
+    if (x[0] < lo[0] || x[1] < lo[1] || x[2] < lo[2] || x[0] > hi[0] || x[1] > hi[1] ||
+        x[2] > hi[2])
+      continue;  // most particles of a coarse level: far from the fine region
+    const int c = g.cell_of(x);
+    if (c < 0) continue;
+    if (feedback) ps.force[i] += ps.mass[i] * acceleration[c];
+    if (!push || !grid_->boundary(c)) continue;
+    const Real r = ps.radius[i];
+    for (int f : grid_->faces_of(c)) {
+      const InterfaceFace& face = grid_->faces()[f];
+      const Real p = pressure[f];
+      if (!(p > 0)) continue;
+      const Real s = (x[face.axis] - face.centre[face.axis]) * face.normal[face.axis];
+      if (s < 0 || s >= layer_) continue;
+      if (ps.velocity[i].dot(face.normal) > max_inward_speed[f]) continue;
+      Real w = 1;
+      if (s > layer_ - fade_) {
+        const Real q = std::sin(0.5 * M_PI * (layer_ - s) / fade_);
+        w = q * q;
+      }
+      ps.force[i] += (p * M_PI * r * r * w) * face.normal;
+    }
+  }
+}
+
+}  // namespace grainscale

@@ -1,0 +1,44 @@
+// The forces one level of a hierarchy feels from another (DESIGN.md 4), applied every step
+// after the force reset, before the contacts; both are set per exchange interval by the
+// hierarchy's controllers (python/grainscale/hierarchy.py) on the cells of one ExchangeGrid.
+//
+// Fine -> coarse, velocity feedback: every owned particle in cell c gets F = m a_c, the cell's
+// acceleration towards the fine Favre velocity (zero outside the coupled cells).
+//
+// Coarse -> fine, stress boundary condition: a particle within `layer` of an interface face
+// (inside the region, in that face's cell) is pushed along the face's inward normal with
+//   F = p_f pi r^2 w(s),   w = 1 for s <= layer - fade,  w = sin^2(pi/2 (layer - s) / fade)
+// up to s = layer (s: distance from the face), so the pushing layer ends smoothly; p_f >= 0 is
+// the face's controller output (Pa; never pulling). A particle already moving inward faster than
+// the face's `max_inward_speed` is not pushed (the velocity limiter).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "coupling/exchange_grid.hpp"
+#include "state/domain.hpp"
+#include "state/particle_store.hpp"
+
+namespace grainscale {
+
+class CouplingForces {
+ public:
+  CouplingForces(std::shared_ptr<const ExchangeGrid> grid, Real layer, Real fade);
+
+  const ExchangeGrid& grid() const { return *grid_; }
+  // Per cell (m/s^2); empty: no velocity feedback.
+  std::vector<Vec3> acceleration;
+  // Per interface face (Pa, >= 0) and the limiter's speed (m/s); empty: no stress condition.
+  std::vector<Real> pressure;
+  std::vector<Real> max_inward_speed;
+
+  // Adds the forces to the owned particles of `ps`.
+  void apply(ParticleStore& ps, const Domain& domain) const;
+
+ private:
+  std::shared_ptr<const ExchangeGrid> grid_;
+  Real layer_ = 0, fade_ = 0;
+};
+
+}  // namespace grainscale

@@ -1,0 +1,92 @@
+#include "coupling/flux_inserter.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "insert/placement.hpp"
+
+namespace grainscale {
+
+FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
+                           const SizeDistribution& radius, Real density, std::int32_t material,
+                           Real spin_scale, std::uint64_t seed)
+    : radius_(radius), density_(density), material_(material), spin_scale_(spin_scale), rng_(seed) {
+  const int a = face.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+  Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();
+  e1[b] = grid.edge[b];
+  e2[c] = grid.edge[c];
+  const Vec3 corner = face.centre - 0.5 * e1 - 0.5 * e2;
+  const Real depth = std::min(4 * radius.max_radius(), grid.edge[a]);
+  shell_ = Region::parallelepiped(corner, e1, e2, depth * face.normal);
+  next_ = radius_.sample(rng_);
+}
+
+void FluxInserter::feed(Real mass, const Vec3& velocity, const Vec3& spin) {
+  if (!(mass > 0)) return;
+  fed_mass_ += mass;
+  owed_ += mass;
+  velocity_ = velocity;
+  spin_ = spin_scale_ * spin;
+  while (owed_ >= mass_of(next_)) {
+    owed_ -= mass_of(next_);
+    pending_.push_back(next_);
+    next_ = radius_.sample(rng_);
+  }
+}
+
+void FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
+                         std::vector<Vec3>& position, std::vector<Real>& radius) {
+  const std::size_t before = radius.size();
+  place_pending(pending_, shell_, 50, rng_, grid, walls, position, radius);
+  for (std::size_t k = before; k < radius.size(); ++k) {
+    inserted_mass_ += mass_of(radius[k]);
+    ++inserted_count_;
+  }
+}
+
+Real FluxInserter::pending_mass() const {
+  Real m = owed_;
+  for (Real r : pending_) m += mass_of(r);
+  return m;
+}
+
+std::string FluxInserter::save_state() const {
+  std::ostringstream out;
+  out.precision(std::numeric_limits<Real>::max_digits10);
+  out << "flux-v1 " << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' ' << inserted_mass_ << ' '
+      << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1] << ' ' << velocity_[2] << ' '
+      << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2] << ' ' << pending_.size();
+  for (Real r : pending_) out << ' ' << r;
+  out << ' ' << rng_;
+  return out.str();
+}
+
+void FluxInserter::load_state(const std::string& state) {
+  std::istringstream in(state);
+  std::string tag;
+  std::size_t n = 0;
+  Real owed = 0, next = 0, fed = 0, inserted = 0;
+  std::int64_t count = 0;
+  Vec3 v, w;
+  in >> tag >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >>
+      w[2] >> n;
+  std::vector<Real> pending(in ? n : 0);
+  for (Real& r : pending) in >> r;
+  Rng rng;
+  in >> rng;
+  if (tag != "flux-v1" || in.fail())
+    throw_invalid("FluxInserter state", "text written by save_state()", "'" + tag + " ...'");
+  owed_ = owed;
+  next_ = next;
+  fed_mass_ = fed;
+  inserted_mass_ = inserted;
+  inserted_count_ = count;
+  velocity_ = v;
+  spin_ = w;
+  pending_.swap(pending);
+  rng_ = rng;
+}
+
+}  // namespace grainscale

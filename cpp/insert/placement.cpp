@@ -1,0 +1,36 @@
+#include "insert/placement.hpp"
+
+namespace grainscale {
+
+void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
+                   OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
+                   std::vector<Real>& radius) {
+  const int give_up_after = 32;
+  int failures = 0;
+  std::size_t k = 0;
+  std::vector<Real> still_pending;
+  for (; k < pending.size() && failures < give_up_after; ++k) {
+    const Real r = pending[k];
+    bool ok = false;
+    for (int attempt = 0; attempt < max_attempts && !ok; ++attempt) {
+      const Vec3 x = region.sample(rng, r);
+      if ((region.samples_inside() || region.contains(x, r)) && !grid.overlaps(x, r) &&
+          walls.clear(x, r)) {
+        grid.add(x, r);
+        position.push_back(x);
+        radius.push_back(r);
+        ok = true;
+      }
+    }
+    if (ok) {
+      failures = 0;
+    } else {
+      ++failures;
+      still_pending.push_back(r);
+    }
+  }
+  still_pending.insert(still_pending.end(), pending.begin() + k, pending.end());
+  pending.swap(still_pending);
+}
+
+}  // namespace grainscale

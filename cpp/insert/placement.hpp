@@ -1,0 +1,22 @@
+// Random sequential placement of waiting particles in a region (stream batches, the flux
+// insertion of a hierarchy's fine level): first come, first served, each tried at up to
+// `max_attempts` random centres of `region`, kept where it overlaps no sphere of `grid` and
+// touches no wall. A run of 32 consecutive failures means the region is full: the rest waits.
+#pragma once
+
+#include <vector>
+
+#include "insert/occupancy_grid.hpp"
+#include "insert/random.hpp"
+#include "insert/region.hpp"
+#include "insert/wall_clearance.hpp"
+
+namespace grainscale {
+
+// Places radii of `pending` in order; placed ones are appended to position/radius, added to the
+// grid and removed from `pending` (the others keep their order).
+void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
+                   OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
+                   std::vector<Real>& radius);
+
+}  // namespace grainscale
