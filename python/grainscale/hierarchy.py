@@ -166,6 +166,15 @@ def _flowing(base: scaling.ParameterSet) -> tuple[Distribution, Material]:
     return as_distribution(size, "Hierarchy", "base.size"), material
 
 
+def describe_balance(b: dict[str, float]) -> str:
+    """One line of a :meth:`Hierarchy.mass_balance` entry, in grams (unaccounted in kg)."""
+    return (
+        f"interface {b['parent']:g} -> {b['child']:g}: expected {b['expected'] * 1e3:.3f} g, "
+        f"inserted {b['inserted'] * 1e3:.3f} g, pending {b['pending'] * 1e3:.4f} g, "
+        f"unaccounted {b['unaccounted']:.2e} kg"
+    )
+
+
 class _Coupled:
     """One parent-child pair: the C++ interface and the controllers' state."""
 
@@ -479,19 +488,21 @@ class Hierarchy:
             error = np.where(active, sc - sf, 0.0)
             trial = c.integral + error * T
             p = kp * error + ki * trial
-            saturated = (p < 0) | ~active
-            c.integral = np.where(saturated, c.integral, trial)  # anti-windup
-            c.integral[~active] = 0.0
-            c.pressure = np.where(saturated, 0.0, p)
-            # Limiter: no push on particles moving inward faster than the coarse ones do.
-            vmax_in = np.maximum(
-                np.einsum("ij,ij->i", np.where(normal > 0, pf["velocity_max"][cells], 0.0), normal)
-                + np.einsum(
-                    "ij,ij->i", np.where(normal < 0, pf["velocity_min"][cells], 0.0), normal
-                ),
-                0.0,
-            )
-            c.max_inward = vmax_in
+            # Anti-windup (conditional integration): the integral stops while the output is
+            # clipped (never pulling, at most 10 x the coarse stress) and the error drives it
+            # further out, and (frozen, not reset) on faces not controlled this interval.
+            p_max = 10.0 * np.maximum(sc, 0.0)
+            saturated = ((p < 0) & (error < 0)) | ((p > p_max) & (error > 0)) | ~active
+            c.integral = np.where(saturated, c.integral, trial)
+            c.pressure = np.where(active, np.clip(p, 0.0, p_max), 0.0)
+            # Limiter: no push on particles moving inward faster than the coarse ones do (their
+            # largest speed along the inward normal n = +-e_axis), nor faster than a tenth of the
+            # free-fall speed over a fine diameter when the coarse bed is at rest.
+            extreme = np.where(normal > 0, pf["velocity_max"][cells], pf["velocity_min"][cells])
+            coarse_in = np.einsum("ij,ij->i", extreme, normal)
+            g = float(np.linalg.norm(self.base.gravity))
+            floor = 0.1 * math.sqrt(g * 2 * self.sizes[c.child].max_radius)
+            c.max_inward = np.maximum(coarse_in, floor)
             csim._level.set_coupling_pressure(c.child_coupling, c.pressure, c.max_inward)
 
     def _apply_controls(self, c: _Coupled) -> None:

