@@ -14,6 +14,7 @@ model in bench/SCALING.md.
 Usage: python bench/python/scaling.py [--size 200000] [--steps 4000] [--ranks 1 2]
                                       [--repeats 3] [--only grainscale|liggghts]
                                       [--halo 2 4 8] [--halo-steps 200]
+                                      [--balance-every STEPS]
 """
 
 from __future__ import annotations
@@ -53,6 +54,10 @@ class Run:
         self.extra: dict[str, Any] = {}
 
 
+# grainscale's automatic load-balancing interval (steps) in the runs; None: the engine's default.
+BALANCE_EVERY: int | None = None
+
+
 def run_one(code: str, ranks: int, case: SettleCase, workdir: Path, rnd: int, exe: str) -> Run:
     if code == "liggghts":
         log = run_liggghts_log(exe, workdir, "in.settle", "log.settle", ranks=ranks)
@@ -63,6 +68,8 @@ def run_one(code: str, ranks: int, case: SettleCase, workdir: Path, rnd: int, ex
         run.extra = {"atoms": int(log["thermo"][-1]["Atoms"])}
         return run
     options = ["--case", str(workdir / "case.json"), "--state", str(workdir / "state.npz")]
+    if BALANCE_EVERY is not None:
+        options += ["--balance-every", str(BALANCE_EVERY)]
     res, rss, _, warnings = run_grainscale_worker(WORKER, workdir, options, ranks=ranks)
     if res["n_final"] != case.n_particles:
         raise BenchmarkError(f"grainscale lost particles: {res['n_final']} of {case.n_particles}")
@@ -177,7 +184,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--halo", type=int, nargs="*", default=[], help="rank counts for halos")
     parser.add_argument("--halo-steps", type=int, default=200)
     parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT)
+    parser.add_argument(
+        "--balance-every", type=int, default=None, help="grainscale's load-balancing interval"
+    )
     args = parser.parse_args(argv)
+    global BALANCE_EVERY
+    BALANCE_EVERY = args.balance_every
     codes = [args.only] if args.only else list(CODES)
     try:
         exe = ensure_liggghts() if "liggghts" in codes else ""

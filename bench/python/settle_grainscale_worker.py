@@ -22,7 +22,7 @@ import numpy as np
 from settle_case import SettleCase
 
 
-def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
+def run(case: SettleCase, state_file: Path, balance_every: int | None = None) -> dict[str, Any]:
     """Build the case with the grainscale API, run it and return timings and observables."""
     import grainscale as gs  # imported here so that import time is outside the timed section
 
@@ -43,6 +43,8 @@ def run(case: SettleCase, state_file: Path) -> dict[str, Any]:
     ]
     for point, normal in walls:
         sim.add_wall(gs.geometry.Plane(point=point, normal=normal, material=mat))
+    if balance_every is not None and sim.ranks > 1:
+        sim.balance(every=balance_every)  # else the engine's default (every 500 steps)
     ke_initial = float(sim.kinetic_energy())
     setup_seconds = time.perf_counter() - t_setup
 
@@ -154,9 +156,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--case", type=Path, required=True, help="case parameters (JSON)")
     parser.add_argument("--state", type=Path, required=True, help="initial state (.npz)")
     parser.add_argument("--output", type=Path, required=True, help="result file (JSON)")
+    parser.add_argument(
+        "--balance-every", type=int, default=None, help="automatic load balancing interval"
+    )
     args = parser.parse_args(argv)
     case = SettleCase(**json.loads(args.case.read_text()))
-    result = run(case, args.state)
+    result = run(case, args.state, args.balance_every)
     from grainscale.parallel import launched_ranks
 
     if launched_ranks() == 1 or _rank() == 0:

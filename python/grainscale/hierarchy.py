@@ -20,8 +20,8 @@ number of steps of every level). Every exchange interval (:class:`Exchange`), co
    fraction ratio when ``mass_flux_correction``), limited by the cell's velocity range, and
    (b) the coarse -> fine stress boundary condition, a PI controller per interface face
    (anti-windup, never pulling) whose pressure pushes the child's particles in a layer of
-   ~1.3 fine diameters (sin^2 fade) so that the child's normal stress in the boundary cell
-   follows the parent's.
+   ~1.3 fine diameters (sin^2 fade) so that the child's normal stress per unit solid volume
+   (sigma / phi, the mean contact load per particle) in the boundary cell follows the parent's.
 
 Python schedules; the per-particle work (flux meter, insertion, averaging, coupling forces) is in
 C++ (cpp/coupling, cpp/field). Under MPI every level is decomposed over the same communicator.
@@ -482,10 +482,16 @@ class Hierarchy:
             normal = c.grid["face_normal"]
             sc = pf["stress"][cells, axes, axes]
             sf = cf["stress"][cells, axes, axes]
-            active = (pf["mass"][cells] > 0) & (
-                pf["solid_fraction"][cells] >= ex.skip_ratio * cf["solid_fraction"][cells]
-            )
-            error = np.where(active, sc - sf, 0.0)
+            phi_c, phi_f = pf["solid_fraction"][cells], cf["solid_fraction"][cells]
+            active = (pf["mass"][cells] > 0) & (phi_c >= ex.skip_ratio * phi_f)
+            # What follows the coarse cell is the stress per unit solid volume, sigma / phi (the
+            # mean contact load per particle, DESIGN.md 4; invariant under CG scaling): a
+            # boundary cell that the fine level fills less densely than the coarse one (its
+            # insertion shell lags) is not pushed harder to make up for its empty part, which
+            # would overload the cells inside it.
+            with np.errstate(divide="ignore", invalid="ignore"):
+                target = np.where(active, sc * phi_f / phi_c, 0.0)
+            error = np.where(active, target - sf, 0.0)
             trial = c.integral + error * T
             p = kp * error + ki * trial
             # Anti-windup (conditional integration): the integral stops while the output is

@@ -160,22 +160,47 @@ def l1(test: np.ndarray, ref: np.ndarray) -> float:
     return float(np.sum(np.abs(test - ref)) / np.sum(np.abs(ref)))
 
 
-def study(case: BinCase, output: Path, runs: Sequence[str]) -> dict[str, Any]:
+def _seed_mean(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The runs of one configuration over the seeds: mean cell fields, summed wall-clock, the
+    per-seed mass balances."""
+    out = dict(runs[0])
+    for key in ("stress_zz", "solid_fraction"):
+        out[key] = np.mean([np.asarray(r[key]) for r in runs], axis=0)
+    out["wall_clock"] = float(np.mean([r["wall_clock"] for r in runs]))
+    out["particles"] = int(np.mean([r["particles"] for r in runs]))
+    if "mass_balance" in out:
+        out["mass_balance"] = [b for r in runs for b in r["mass_balance"]]
+    out.pop("pressure", None)
+    return out
+
+
+def study(
+    case: BinCase, output: Path, runs: Sequence[str], seeds: Sequence[int] | None = None
+) -> dict[str, Any]:
+    """Every run of ``runs`` once per seed (default: the case's); the cell fields compared are
+    the means over the seeds (in a bed at rest, time averaging does not smooth the force chains;
+    seeds do)."""
     output.mkdir(parents=True, exist_ok=True)
-    results: dict[str, Any] = {}
-    for name in runs:
-        print(f"running {name} ...", flush=True)
-        if name == "resolved":
-            results[name] = run_single(case, 1)
-        elif name == "cg2":
-            results[name] = run_single(case, 2)
-        else:
-            results[name] = run_mlcg(case)
-        print(f"  {name}: {results[name]['wall_clock']:.0f} s", flush=True)
+    seeds = list(seeds) if seeds else [case.seed]
+    per_seed: dict[str, list[dict[str, Any]]] = {name: [] for name in runs}
+    for seed in seeds:
+        c = dataclasses.replace(case, seed=seed)
+        for name in runs:
+            print(f"running {name}, seed {seed} ...", flush=True)
+            if name == "resolved":
+                r = run_single(c, 1)
+            elif name == "cg2":
+                r = run_single(c, 2)
+            else:
+                r = run_mlcg(c)
+            per_seed[name].append(r)
+            print(f"  {name}: {r['wall_clock']:.0f} s", flush=True)
+    results = {name: _seed_mean(rs) for name, rs in per_seed.items()}
     ref = results.get("resolved")
     # The window proper: the cells inside the hierarchy's transition layer (all runs alike).
     boundary = next((r["boundary"] for r in results.values() if "boundary" in r), None)
-    summary: dict[str, Any] = {"case": dataclasses.asdict(case), "runs": {}}
+    inner = ~np.asarray(boundary, bool) if boundary is not None else None
+    summary: dict[str, Any] = {"case": dataclasses.asdict(case), "seeds": seeds, "runs": {}}
     for name, r in results.items():
         entry = {
             k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items() if k != "dims"
@@ -184,13 +209,20 @@ def study(case: BinCase, output: Path, runs: Sequence[str]) -> dict[str, Any]:
         if ref is not None and name != "resolved" and tuple(r["dims"]) == tuple(ref["dims"]):
             entry["l1_stress_zz"] = l1(r["stress_zz"], ref["stress_zz"])
             entry["l1_solid_fraction"] = l1(r["solid_fraction"], ref["solid_fraction"])
-            if boundary is not None:
-                inner = ~np.asarray(boundary, bool)
+            if inner is not None:
                 entry["interior_l1_stress_zz"] = l1(r["stress_zz"][inner], ref["stress_zz"][inner])
                 entry["interior_l1_solid_fraction"] = l1(
                     r["solid_fraction"][inner], ref["solid_fraction"][inner]
                 )
         summary["runs"][name] = entry
+    # The scatter of the reference itself: one resolved seed against the mean of the others.
+    resolved = per_seed.get("resolved", [])
+    if len(resolved) >= 2 and inner is not None:
+        scatter = []
+        for k, r in enumerate(resolved):
+            others = np.mean([o["stress_zz"] for j, o in enumerate(resolved) if j != k], axis=0)
+            scatter.append(l1(np.asarray(r["stress_zz"])[inner], others[inner]))
+        summary["resolved_seed_scatter_interior_l1_stress_zz"] = scatter
     (output / "results.json").write_text(json.dumps(summary, indent=1, default=float))
     (output / "report.md").write_text(report(case, summary))
     plot(output / "bin_fill.png", summary)
@@ -209,7 +241,8 @@ def report(case: BinCase, s: dict[str, Any]) -> str:
         f"- bin {case.width * 1e3:g} x {case.depth * 1e3:g} mm, {case.fill_mass * 1e3:g} g of "
         f"d = {case.diameter * 1e3:g} mm spheres poured at {case.fill_rate:g} kg/s, settled "
         f"until t = {case.end_time:g} s; window z in [0, {case.window_top * 1e3:g}] mm, cells "
-        f"{case.cell_size * 1e3:g} mm; averages over the last 0.05 s ({case.samples} samples)",
+        f"{case.cell_size * 1e3:g} mm; averages over the last 0.05 s ({case.samples} samples) "
+        f"and over the seeds {', '.join(str(k) for k in s.get('seeds', [case.seed]))}",
         "",
         "L1-relative against the resolved run over the window proper (the cells below its "
         "transition layer, where the controller pushes) and over all its cells:",
@@ -229,6 +262,12 @@ def report(case: BinCase, s: dict[str, Any]) -> str:
     for name, r in s["runs"].items():
         prof = _profile(r["stress_zz"], r["dims"])
         lines.append(f"- {name}: " + ", ".join(f"{v:.0f}" for v in prof))
+    scatter = s.get("resolved_seed_scatter_interior_l1_stress_zz")
+    if scatter:
+        lines.append(
+            "- the reference's own scatter: one resolved seed against the mean of the others, "
+            "L1 sigma_zz over the window proper: " + ", ".join(f"{v:.3f}" for v in scatter)
+        )
     for b in s["runs"].get("mlcg", {}).get("mass_balance", []):
         lines.append(f"- mass balance, {describe_balance(b)}")
     lines.append("")
@@ -268,9 +307,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         choices=["resolved", "cg2", "mlcg"],
     )
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--seeds", type=int, nargs="+", default=None, help="default: 3 4 5")
     args = parser.parse_args(argv)
     case = QUICK if args.quick else BinCase()
-    study(case, args.output, args.runs)
+    seeds = args.seeds or ([case.seed] if args.quick else [3, 4, 5])
+    study(case, args.output, args.runs, seeds)
     print((args.output / "report.md").read_text())
     return 0
 
