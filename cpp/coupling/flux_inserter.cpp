@@ -57,25 +57,22 @@ std::string FluxInserter::save_state() const {
   out.precision(std::numeric_limits<Real>::max_digits10);
   out << "flux-v1 " << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' ' << inserted_mass_ << ' '
       << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1] << ' ' << velocity_[2] << ' '
-      << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2] << ' ' << pending_.size();
-  for (Real r : pending_) out << ' ' << r;
-  out << ' ' << rng_;
+      << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2];
+  write_pending(out, pending_, rng_);
   return out.str();
 }
 
 void FluxInserter::load_state(const std::string& state) {
   std::istringstream in(state);
   std::string tag;
-  std::size_t n = 0;
   Real owed = 0, next = 0, fed = 0, inserted = 0;
   std::int64_t count = 0;
   Vec3 v, w;
   in >> tag >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >>
-      w[2] >> n;
-  std::vector<Real> pending(in ? n : 0);
-  for (Real& r : pending) in >> r;
+      w[2];
+  std::vector<Real> pending;
   Rng rng;
-  in >> rng;
+  read_pending(in, pending, rng);
   if (tag != "flux-v1" || in.fail())
     throw_invalid("FluxInserter state", "text written by save_state()", "'" + tag + " ...'");
   owed_ = owed;

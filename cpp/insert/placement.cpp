@@ -33,4 +33,18 @@ void place_pending(std::vector<Real>& pending, const Region& region, int max_att
   pending.swap(still_pending);
 }
 
+void write_pending(std::ostream& out, const std::vector<Real>& pending, const Rng& rng) {
+  out << ' ' << pending.size();
+  for (Real r : pending) out << ' ' << r;
+  out << ' ' << rng;
+}
+
+void read_pending(std::istream& in, std::vector<Real>& pending, Rng& rng) {
+  std::size_t n = 0;
+  in >> n;
+  pending.assign(in ? n : 0, 0);
+  for (Real& r : pending) in >> r;
+  in >> rng;
+}
+
 }  // namespace grainscale

@@ -4,6 +4,8 @@
 // touches no wall. A run of 32 consecutive failures means the region is full: the rest waits.
 #pragma once
 
+#include <istream>
+#include <ostream>
 #include <vector>
 
 #include "insert/occupancy_grid.hpp"
@@ -18,5 +20,10 @@ namespace grainscale {
 void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
                    OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
                    std::vector<Real>& radius);
+
+// The waiting radii and the placement engine in a checkpoint text (" n r_1 ... r_n <engine>",
+// shared by the stream and the flux inserters); read_pending leaves `in` failed on bad text.
+void write_pending(std::ostream& out, const std::vector<Real>& pending, const Rng& rng);
+void read_pending(std::istream& in, std::vector<Real>& pending, Rng& rng);
 
 }  // namespace grainscale

@@ -89,9 +89,8 @@ std::string StreamInserter::save_state() const {
   std::ostringstream out;
   out.precision(std::numeric_limits<Real>::max_digits10);
   out << "stream-v1 " << spec_.start << ' ' << next_batch_ << ' ' << scheduled_mass_ << ' '
-      << inserted_mass_ << ' ' << inserted_count_ << ' ' << pending_.size();
-  for (Real r : pending_) out << ' ' << r;
-  out << ' ' << rng_;
+      << inserted_mass_ << ' ' << inserted_count_;
+  write_pending(out, pending_, rng_);
   return out.str();
 }
 
@@ -100,12 +99,10 @@ void StreamInserter::load_state(const std::string& state) {
   std::string tag;
   std::int64_t batch = 0, count = 0;
   Real start = 0, scheduled = 0, inserted = 0;
-  std::size_t n = 0;
-  in >> tag >> start >> batch >> scheduled >> inserted >> count >> n;
-  std::vector<Real> pending(in ? n : 0);
-  for (Real& r : pending) in >> r;
+  in >> tag >> start >> batch >> scheduled >> inserted >> count;
+  std::vector<Real> pending;
   Rng rng;
-  in >> rng;
+  read_pending(in, pending, rng);
   if (tag != "stream-v1" || in.fail())
     throw_invalid("Stream state", "text written by get_state() of a stream", "'" + tag + " ...'");
   spec_.start = start;  // as registered in the run that wrote the state (may default to "now")
