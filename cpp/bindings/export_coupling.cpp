@@ -264,6 +264,17 @@ void export_coupling(py::module_& m) {
       },
       py::arg("index"), py::arg("pressure"), py::arg("max_inward_speed"));
   level.def(
+      "coupling_push_moment",
+      [](Level& l, int k) {
+        std::vector<Real> m;
+        {
+          py::gil_scoped_release release;
+          m = l.coupling_push_moment(k);
+        }
+        return py::array_t<Real>(static_cast<py::ssize_t>(m.size()), m.data());
+      },
+      py::arg("index"));
+  level.def(
       "add_region_outlet",
       [](Level& l, const Interface& it, int every) {
         OutletSpec s;

@@ -14,11 +14,11 @@ CouplingForces::CouplingForces(std::shared_ptr<const ExchangeGrid> grid, Real la
     throw_invalid("Exchange.fade", "positive and at most the layer thickness (m)", fade);
 }
 
-void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
+template <class Visit, class Push>
+void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Visit&& visit,
+                              Push&& push) const {
   const FieldGrid& g = grid_->grid();
-  const bool feedback = !acceleration.empty();
-  const bool push = !pressure.empty();
-  if (!feedback && !push) return;
+  const bool pushing = !pressure.empty();
   const Vec3 lo = g.origin, hi = g.upper();
   for (Index i = 0; i < ps.n_owned(); ++i) {
     Vec3 x = ps.position[i];
@@ -32,8 +32,8 @@ void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
       continue;  // most particles of a coarse level: far from the fine region
     const int c = g.cell_of(x);
     if (c < 0) continue;
-    if (feedback) ps.force[i] += ps.mass[i] * acceleration[c];
-    if (!push || !grid_->boundary(c)) continue;
+    visit(i, c);
+    if (!pushing || !grid_->boundary(c)) continue;
     const Real r = ps.radius[i];
     for (int f : grid_->faces_of(c)) {
       const InterfaceFace& face = grid_->faces()[f];
@@ -47,9 +47,30 @@ void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
         const Real q = std::sin(0.5 * M_PI * (layer_ - s) / fade_);
         w = q * q;
       }
-      ps.force[i] += (p * M_PI * r * r * w) * face.normal;
+      push(i, f, p * M_PI * r * r * w, s);
     }
   }
+}
+
+void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
+  const bool feedback = !acceleration.empty();
+  if (!feedback && pressure.empty()) return;
+  const auto& faces = grid_->faces();
+  for_each(
+      ps, domain,
+      [&](Index i, int c) {
+        if (feedback) ps.force[i] += ps.mass[i] * acceleration[c];
+      },
+      [&](Index i, int f, Real magnitude, Real) { ps.force[i] += magnitude * faces[f].normal; });
+}
+
+std::vector<Real> CouplingForces::push_moment(const ParticleStore& ps, const Domain& domain) const {
+  std::vector<Real> moment(grid_->faces().size(), 0.0);
+  if (pressure.empty()) return moment;
+  for_each(
+      ps, domain, [](Index, int) {},
+      [&](Index, int f, Real magnitude, Real s) { moment[f] += magnitude * s; });
+  return moment;
 }
 
 }  // namespace grainscale

@@ -11,6 +11,12 @@
 // up to s = layer (s: distance from the face), so the pushing layer ends smoothly; p_f >= 0 is
 // the face's controller output (Pa; never pulling). A particle already moving inward faster than
 // the face's `max_inward_speed` is not pushed (the velocity limiter).
+//
+// The push stands for the contacts the fine particles would have with the material beyond the
+// face; push_moment() gives, per face, the virial those contacts would add to the face's cell,
+// sum_i |F_i| s_i (N m; branch vector from the face to the centre), which the controller adds to
+// the cell's contact virial: without it the cell average misses the load the pushed layer
+// carries over its thickness and the controller overloads the cells inside.
 #pragma once
 
 #include <memory>
@@ -35,10 +41,17 @@ class CouplingForces {
 
   // Adds the forces to the owned particles of `ps`.
   void apply(ParticleStore& ps, const Domain& domain) const;
+  // Per interface face: sum over the owned particles of |F_push| s (N m), this rank only.
+  std::vector<Real> push_moment(const ParticleStore& ps, const Domain& domain) const;
 
  private:
   std::shared_ptr<const ExchangeGrid> grid_;
   Real layer_ = 0, fade_ = 0;
+
+  // Calls visit(i, cell) for every owned particle inside the grid, and push(i, face, |F|, s)
+  // for every push it feels.
+  template <class Visit, class Push>
+  void for_each(const ParticleStore& ps, const Domain& domain, Visit&& visit, Push&& push) const;
 };
 
 }  // namespace grainscale

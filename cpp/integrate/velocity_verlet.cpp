@@ -25,11 +25,11 @@ inline void half_kick(Vec3& v, Vec3& w, const Vec3& f, const Vec3& t, Real hm, R
 
 }  // namespace
 
-template <bool kPlanar, bool kClosingKick>
-Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
-                const std::vector<Vec3>& reference) {
+// The pass over the particles `select` yields (kick_drift's body, shared by its variants).
+template <bool kPlanar, bool kClosingKick, class Select>
+inline Real kick_drift_over(ParticleStore& ps, Real dt, const Vec3& gravity,
+                            const std::vector<Vec3>& reference, Index count, Select select) {
   const Real half = 0.5 * dt;
-  const Index n = ps.n_owned();
   Vec3* x = ps.position.data();
   Vec3* v = ps.velocity.data();
   Vec3* w = ps.angular_velocity.data();
@@ -39,7 +39,9 @@ Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
   const Real* im = ps.inv_mass.data();
   const Real* ii = ps.inv_inertia.data();
   Real max_d2 = 0;
-  for (Index i = 0; i < n; ++i) {
+  for (Index k = 0; k < count; ++k) {
+    const Index i = select(k);
+    if (i < 0) continue;
     const Real hm = half * im[i], hi = half * ii[i];
     if constexpr (kClosingKick) half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
     half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
@@ -50,6 +52,29 @@ Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
     if (d2 > max_d2 || d2 != d2) max_d2 = d2;  // a NaN sticks, so it forces a (checked) rebuild
   }
   return max_d2;
+}
+
+template <bool kPlanar, bool kClosingKick>
+Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
+                const std::vector<Vec3>& reference) {
+  return kick_drift_over<kPlanar, kClosingKick>(ps, dt, gravity, reference, ps.n_owned(),
+                                                [](Index k) { return k; });
+}
+
+template <bool kPlanar>
+Real kick_drift_except(ParticleStore& ps, Real dt, const Vec3& gravity,
+                       const std::vector<Vec3>& reference, const std::vector<std::uint8_t>& skip) {
+  const std::uint8_t* s = skip.data();
+  return kick_drift_over<kPlanar, true>(ps, dt, gravity, reference, ps.n_owned(),
+                                        [s](Index k) { return s[k] ? Index(-1) : k; });
+}
+
+template <bool kPlanar>
+Real kick_drift_only(ParticleStore& ps, Real dt, const Vec3& gravity,
+                     const std::vector<Vec3>& reference, const std::vector<Index>& only) {
+  const Index* o = only.data();
+  return kick_drift_over<kPlanar, true>(ps, dt, gravity, reference, static_cast<Index>(only.size()),
+                                        [o](Index k) { return o[k]; });
 }
 
 template <bool kPlanar>
@@ -70,6 +95,14 @@ template Real kick_drift<false, false>(ParticleStore&, Real, const Vec3&, const 
 template Real kick_drift<false, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
 template Real kick_drift<true, false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
 template Real kick_drift<true, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
+template Real kick_drift_except<false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+                                       const std::vector<std::uint8_t>&);
+template Real kick_drift_except<true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+                                      const std::vector<std::uint8_t>&);
+template Real kick_drift_only<false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+                                     const std::vector<Index>&);
+template Real kick_drift_only<true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+                                    const std::vector<Index>&);
 template void kick<false>(ParticleStore&, Real);
 template void kick<true>(ParticleStore&, Real);
 

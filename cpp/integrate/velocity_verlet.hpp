@@ -11,6 +11,9 @@
 // components (which vanish for in-plane contacts anyway) are ignored.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "state/particle_store.hpp"
 
 namespace grainscale {
@@ -22,6 +25,19 @@ namespace grainscale {
 template <bool kPlanar, bool kClosingKick>
 Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
                 const std::vector<Vec3>& reference);
+
+// The same pass in two parts, for a force evaluation whose ghost forces are still travelling
+// (GhostExchange::reverse_begin): first every owned particle with skip[i] == 0, then, once
+// the forces are complete, those in `only`. Per particle the same operations as kick_drift.
+template <bool kPlanar>
+Real kick_drift_except(ParticleStore& ps, Real dt, const Vec3& gravity,
+                       const std::vector<Vec3>& reference, const std::vector<std::uint8_t>& skip);
+template <bool kPlanar>
+Real kick_drift_only(ParticleStore& ps, Real dt, const Vec3& gravity,
+                     const std::vector<Vec3>& reference, const std::vector<Index>& only);
+
+// The larger of two displacements from kick_drift, NaN winning.
+inline Real max_displacement(Real a, Real b) { return (b > a || b != b) && a == a ? b : a; }
 
 // Closing half kick (the last step of a run).
 template <bool kPlanar>

@@ -492,7 +492,7 @@ void Level::rebuild() {
 }
 
 template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
-void Level::compute_forces(const Law& law) {
+void Level::compute_forces(const Law& law, bool defer_reverse) {
   const Index n = ps_.n_owned();
   if constexpr (!kOwnedReset)
     for (Index i = 0; i < n; ++i) {
@@ -510,12 +510,17 @@ void Level::compute_forces(const Law& law) {
   for (const CouplingForces& c : couplings_) c.apply(ps_, domain_);
   if constexpr (kStats) stats_.clear();
   accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
-  {
-    const ScopedTimer timer(halo_seconds_);
-    ghosts_.reverse(ps_, comm_);
-  }
+  // The ghost forces travel while the walls are computed (and, deferred, while the particles
+  // that did not send ghosts are integrated); walls act on owned particles only.
+  ghosts_.reverse_begin(ps_, comm_);
   accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, primitives_, wall_contacts_, dt_,
                                                stats_);
+  if (defer_reverse && !ghosts_.deferred().empty()) {
+    reverse_pending_ = true;
+  } else {
+    const ScopedTimer timer(halo_seconds_);
+    ghosts_.reverse_end(ps_, comm_);
+  }
   if (comm_.parallel()) {
     const ScopedTimer timer(halo_seconds_);
     // Servo walls move by the total load every step; other loads are read after a run.
@@ -539,8 +544,21 @@ void Level::run_with(const Law& law, std::int64_t steps) {
   for (std::int64_t s = 0; s < steps; ++s) {
     // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
     // which also resets the owned forces to m g.
-    const Real max_d2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_, x_at_build_)
-                               : kick_drift<kPlanar, true>(ps_, dt_, gravity_, x_at_build_);
+    Real max_d2;
+    if (reverse_pending_) {
+      // The particles whose forces are complete move first, the others once theirs arrived.
+      max_d2 = kick_drift_except<kPlanar>(ps_, dt_, gravity_, x_at_build_, ghosts_.deferred_mask());
+      {
+        const ScopedTimer timer(halo_seconds_);
+        ghosts_.reverse_end(ps_, comm_);
+      }
+      reverse_pending_ = false;
+      max_d2 = max_displacement(
+          max_d2, kick_drift_only<kPlanar>(ps_, dt_, gravity_, x_at_build_, ghosts_.deferred()));
+    } else {
+      max_d2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_, x_at_build_)
+                      : kick_drift<kPlanar, true>(ps_, dt_, gravity_, x_at_build_);
+    }
     Real wall_shift = 0;
     for (std::size_t k = 0; k < walls_.size(); ++k) {
       wall_shift_[k] += walls_[k].advance(dt_, wall_reach_[k]);
@@ -565,12 +583,13 @@ void Level::run_with(const Law& law, std::int64_t steps) {
       const ScopedTimer timer(halo_seconds_);
       ghosts_.forward(ps_, comm_);
     }
+    // Only a step followed by another in this run leaves its ghost forces travelling.
     if (s + 1 == steps)
       compute_forces<Law, true, true, false>(law);
     else if (owned_reset)
-      compute_forces<Law, true, false, true>(law);
+      compute_forces<Law, true, false, true>(law, true);
     else
-      compute_forces<Law, true, false, false>(law);
+      compute_forces<Law, true, false, false>(law, true);
   }
   if (steps > 0) kick<kPlanar>(ps_, dt_);
 }

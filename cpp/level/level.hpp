@@ -171,6 +171,8 @@ class Level {
   // Forces from another level, applied every step after the force reset; returns the index.
   int add_coupling(CouplingForces forces);
   CouplingForces& coupling(int index);
+  // Collective: coupling(index).push_moment summed over the ranks (N m per interface face).
+  std::vector<Real> coupling_push_moment(int index);
   // --- end hierarchy coupling ---
 
  private:
@@ -178,7 +180,9 @@ class Level {
   void run_with(const Law& law, std::int64_t steps);
   // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
   template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
-  void compute_forces(const Law& law);
+  // defer_reverse: leaves the ghost forces travelling (GhostExchange::reverse_begin); the next
+  // step's kick completes them (reverse_pending_).
+  void compute_forces(const Law& law, bool defer_reverse = false);
   void prepare();
   void validate_periodic_lengths() const;
   // --- parallel runs (level/level_parallel.cpp) ---
@@ -259,6 +263,7 @@ class Level {
   double halo_seconds_ = 0;
   bool lists_valid_ = false;
   bool forces_valid_ = false;
+  bool reverse_pending_ = false;  // ghost forces still travelling (compute_forces)
   bool law_prepared_ = false;
 
   // --- insertion and outlets (level/level_insert.cpp) ---

@@ -312,6 +312,12 @@ CouplingForces& Level::coupling(int index) {
   return couplings_[index];
 }
 
+std::vector<Real> Level::coupling_push_moment(int index) {
+  std::vector<Real> moment = coupling(index).push_moment(ps_, domain_);
+  comm_.sum_in_place(moment);
+  return moment;
+}
+
 void Level::run_streams() {
   const Real tolerance = 1e-6 * dt_;  // a batch due at t_k runs at the first step with t >= t_k
   std::vector<Vec3> x;

@@ -357,7 +357,7 @@ void Level::load_state(const LevelState& s) {
     fresh.id[k] = (*saved.id)[k];
   }
   ps_ = std::move(fresh);
-  ghosts_.set_stages(std::move(stages));
+  ghosts_.set_stages(std::move(stages), static_cast<Index>(no), comm_);
 
   x_at_build_.resize(no);
   get(s, "lists/x_at_build", x_at_build_.data(), no);

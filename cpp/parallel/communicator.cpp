@@ -28,6 +28,32 @@ struct Communicator::Handle {
 struct Communicator::Handle {};
 #endif
 
+#ifdef GRAINSCALE_HAVE_MPI
+struct Requests::List {
+  std::vector<MPI_Request> pending;
+};
+#else
+struct Requests::List {
+  std::vector<int> pending;  // always empty: a serial run has no messages in flight
+};
+#endif
+
+Requests::Requests() : list_(std::make_unique<List>()) {}
+Requests::~Requests() {
+#ifdef GRAINSCALE_HAVE_MPI
+  // Unfinished requests (an exception between start and wait) are waited for: freeing the
+  // buffers under a live request would corrupt memory. Not after MPI_Finalize.
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized && list_ && !list_->pending.empty())
+    MPI_Waitall(static_cast<int>(list_->pending.size()), list_->pending.data(),
+                MPI_STATUSES_IGNORE);
+#endif
+}
+Requests::Requests(Requests&&) noexcept = default;
+Requests& Requests::operator=(Requests&&) noexcept = default;
+bool Requests::empty() const { return !list_ || list_->pending.empty(); }
+
 bool Communicator::mpi_available() {
 #ifdef GRAINSCALE_HAVE_MPI
   return true;
@@ -234,6 +260,49 @@ void Communicator::sendrecv_known(const void* send, std::size_t send_bytes, int 
   }
   if (dest < 0 && source < 0) return;
   throw std::logic_error("Communicator::sendrecv_known to another rank in a serial run");
+}
+
+void Communicator::start_sendrecv(const void* send, std::size_t send_bytes, int dest, void* recv,
+                                  std::size_t recv_bytes, int source, int tag,
+                                  Requests& requests) const {
+#ifdef GRAINSCALE_HAVE_MPI
+  if (parallel() && !(dest == rank_ && source == rank_)) {
+    // Messages above 1 GiB go in pieces: MPI counts are int.
+    const std::size_t chunk = std::size_t(1) << 30;
+    if (!requests.list_) requests.list_ = std::make_unique<Requests::List>();  // moved from
+    auto& pending = requests.list_->pending;
+    if (source >= 0)
+      for (std::size_t r = 0; r < recv_bytes || r == 0; r += chunk) {
+        pending.emplace_back();
+        MPI_Irecv(static_cast<char*>(recv) + r, static_cast<int>(std::min(chunk, recv_bytes - r)),
+                  MPI_BYTE, source, tag, handle_->comm, &pending.back());
+        if (recv_bytes == 0) break;
+      }
+    if (dest >= 0)
+      for (std::size_t s = 0; s < send_bytes || s == 0; s += chunk) {
+        pending.emplace_back();
+        MPI_Isend(static_cast<const char*>(send) + s,
+                  static_cast<int>(std::min(chunk, send_bytes - s)), MPI_BYTE, dest, tag,
+                  handle_->comm, &pending.back());
+        if (send_bytes == 0) break;
+      }
+    return;
+  }
+#endif
+  (void)requests;
+  sendrecv_known(send, send_bytes, dest, recv, recv_bytes, source, tag);
+}
+
+void Communicator::wait(Requests& requests) const {
+#ifdef GRAINSCALE_HAVE_MPI
+  if (!requests.list_) return;
+  auto& pending = requests.list_->pending;
+  if (!pending.empty())
+    MPI_Waitall(static_cast<int>(pending.size()), pending.data(), MPI_STATUSES_IGNORE);
+  pending.clear();
+#else
+  (void)requests;
+#endif
 }
 
 void Communicator::broadcast(std::string& text, int root) const {

@@ -21,6 +21,23 @@
 
 namespace grainscale {
 
+// Messages in flight (Communicator::start_sendrecv); finished by Communicator::wait.
+class Requests {
+ public:
+  Requests();
+  ~Requests();
+  Requests(const Requests&) = delete;
+  Requests& operator=(const Requests&) = delete;
+  Requests(Requests&&) noexcept;
+  Requests& operator=(Requests&&) noexcept;
+  bool empty() const;
+
+ private:
+  friend class Communicator;
+  struct List;
+  std::unique_ptr<List> list_;
+};
+
 class Communicator {
  public:
   Communicator() = default;  // one rank
@@ -58,6 +75,11 @@ class Communicator {
   // The same with sizes known on both sides (the per-step ghost updates).
   void sendrecv_known(const void* send, std::size_t send_bytes, int dest, void* recv,
                       std::size_t recv_bytes, int source, int tag) const;
+  // The same without waiting: the messages travel while the caller works; the buffers must
+  // stay untouched until wait(requests) returns. To or from the rank itself it copies at once.
+  void start_sendrecv(const void* send, std::size_t send_bytes, int dest, void* recv,
+                      std::size_t recv_bytes, int source, int tag, Requests& requests) const;
+  void wait(Requests& requests) const;
   void broadcast(std::string& text, int root) const;
 
   // Collective error agreement: if any rank passes a non-empty message, every rank throws the

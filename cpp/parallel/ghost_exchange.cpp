@@ -121,6 +121,7 @@ void GhostExchange::build(ParticleStore& ps, const Domain& domain,
       stages_.push_back(std::move(s));
     }
   }
+  find_deferred(ps.n_owned(), comm);
 }
 
 void GhostExchange::forward(ParticleStore& ps, const Communicator& comm) {
@@ -163,40 +164,118 @@ void GhostExchange::forward(ParticleStore& ps, const Communicator& comm) {
   }
 }
 
-void GhostExchange::reverse(ParticleStore& ps, const Communicator& comm) {
+void GhostExchange::set_stages(std::vector<GhostStage> stages, Index n_owned,
+                               const Communicator& comm) {
+  stages_ = std::move(stages);
+  find_deferred(n_owned, comm);
+}
+
+void GhostExchange::find_deferred(Index n_owned, const Communicator& comm) {
+  // The last axis with a stage to or from another rank starts the asynchronous part; without
+  // one, reverse_begin does everything (copies on this rank), in the order of `reverse`.
+  split_ = 0;
+  bool remote = false;
+  for (std::size_t k = stages_.size(); k-- > 0;) {
+    const GhostStage& s = stages_[k];
+    if (!self_stage(s, comm) && (s.send_to >= 0 || s.recv_from >= 0)) {
+      split_ = k;
+      while (split_ > 0 && stages_[split_ - 1].axis == s.axis) --split_;
+      remote = true;
+      break;
+    }
+  }
+  deferred_.clear();
+  deferred_mask_.assign(static_cast<std::size_t>(n_owned), 0);
+  if (!remote) return;
+  // Any owned particle that was sent may get forces back, directly or through the ghosts of
+  // later stages that mirror it.
+  for (const GhostStage& s : stages_)
+    for (Index i : s.send)
+      if (i < n_owned) deferred_mask_[i] = 1;
+  for (Index i = 0; i < n_owned; ++i)
+    if (deferred_mask_[i]) deferred_.push_back(i);
+}
+
+namespace {
+
+void add_back_local(const GhostStage& s, Vec3* f, Vec3* t) {
+  for (std::size_t k = 0; k < s.send.size(); ++k) {
+    const Index i = s.send[k], g = s.recv_first + static_cast<Index>(k);
+    f[i] += f[g];
+    t[i] += t[g];
+  }
+}
+
+void pack_reverse(const GhostStage& s, const Vec3* f, const Vec3* t, std::vector<Real>& out) {
+  out.resize(static_cast<std::size_t>(s.recv_count) * kReverseWidth);
+  Real* p = out.data();
+  for (Index k = 0; k < s.recv_count; ++k, p += kReverseWidth) {
+    const Index g = s.recv_first + k;
+    for (int c = 0; c < 3; ++c) {
+      p[c] = f[g][c];
+      p[3 + c] = t[g][c];
+    }
+  }
+}
+
+void add_back_received(const GhostStage& s, const std::vector<Real>& in, Vec3* f, Vec3* t) {
+  const Real* q = in.data();
+  for (std::size_t k = 0; k < s.send.size(); ++k, q += kReverseWidth) {
+    const Index i = s.send[k];
+    f[i] += Vec3(q[0], q[1], q[2]);
+    t[i] += Vec3(q[3], q[4], q[5]);
+  }
+}
+
+}  // namespace
+
+void GhostExchange::reverse_begin(ParticleStore& ps, const Communicator& comm) {
   Vec3* f = ps.force.data();
   Vec3* t = ps.torque.data();
-  for (auto it = stages_.rbegin(); it != stages_.rend(); ++it) {
-    const GhostStage& s = *it;
-    const std::size_t n_send = s.send.size();
+  in_flight_.clear();
+  // The stages after the split axis copy on this rank (find_deferred chose the split so).
+  for (std::size_t k = stages_.size(); k-- > split_;) {
+    const GhostStage& s = stages_[k];
     if (self_stage(s, comm)) {
-      for (std::size_t k = 0; k < n_send; ++k) {
-        const Index i = s.send[k], g = s.recv_first + static_cast<Index>(k);
-        f[i] += f[g];
-        t[i] += t[g];
-      }
+      add_back_local(s, f, t);
+      continue;
+    }
+    in_flight_.push_back(k);
+  }
+  async_send_.resize(in_flight_.size());
+  async_recv_.resize(in_flight_.size());
+  // Both stages of the split axis are packed before either adds anything: a stage forwards only
+  // what its axis started with, so neither's ghosts receive from the other, as in `reverse`.
+  for (std::size_t j = 0; j < in_flight_.size(); ++j) {
+    const GhostStage& s = stages_[in_flight_[j]];
+    pack_reverse(s, f, t, async_send_[j]);
+    async_recv_[j].resize(s.send.size() * kReverseWidth);
+    comm.start_sendrecv(async_send_[j].data(), async_send_[j].size() * sizeof(Real), s.recv_from,
+                        async_recv_[j].data(), async_recv_[j].size() * sizeof(Real), s.send_to,
+                        tag_of(s, 2), requests_);
+  }
+}
+
+void GhostExchange::reverse_end(ParticleStore& ps, const Communicator& comm) {
+  Vec3* f = ps.force.data();
+  Vec3* t = ps.torque.data();
+  comm.wait(requests_);
+  for (std::size_t j = 0; j < in_flight_.size(); ++j)
+    add_back_received(stages_[in_flight_[j]], async_recv_[j], f, t);
+  in_flight_.clear();
+  for (std::size_t k = split_; k-- > 0;) {
+    const GhostStage& s = stages_[k];
+    if (self_stage(s, comm)) {
+      add_back_local(s, f, t);
       continue;
     }
     // The ghosts go back where they came from; the forces on what this rank sent come in.
-    send_buffer_.resize(static_cast<std::size_t>(s.recv_count) * kReverseWidth);
-    recv_buffer_.resize(n_send * kReverseWidth);
-    Real* p = send_buffer_.data();
-    for (Index k = 0; k < s.recv_count; ++k, p += kReverseWidth) {
-      const Index g = s.recv_first + k;
-      for (int c = 0; c < 3; ++c) {
-        p[c] = f[g][c];
-        p[3 + c] = t[g][c];
-      }
-    }
+    pack_reverse(s, f, t, send_buffer_);
+    recv_buffer_.resize(s.send.size() * kReverseWidth);
     comm.sendrecv_known(send_buffer_.data(), send_buffer_.size() * sizeof(Real), s.recv_from,
                         recv_buffer_.data(), recv_buffer_.size() * sizeof(Real), s.send_to,
                         tag_of(s, 2));
-    const Real* q = recv_buffer_.data();
-    for (std::size_t k = 0; k < n_send; ++k, q += kReverseWidth) {
-      const Index i = s.send[k];
-      f[i] += Vec3(q[0], q[1], q[2]);
-      t[i] += Vec3(q[3], q[4], q[5]);
-    }
+    add_back_received(s, recv_buffer_, f, t);
   }
 }
 

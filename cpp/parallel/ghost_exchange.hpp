@@ -18,8 +18,17 @@
 // Pairs are stored once (neighbor_list.hpp), so Newton's third law holds across ranks: a pair
 // between ranks is computed on the rank owning its particle with the smaller global id and the
 // partner's share travels back in `reverse`.
+//
+// reverse_begin / reverse_end split `reverse` so that the forces travel while the rank works:
+// begin does the stages of the axes after the last one with another rank (copies on the rank
+// itself) and starts that axis's messages; end waits for them and does the stages before it.
+// The same additions in the same order as `reverse`. Meanwhile only the owned particles that
+// were sent as ghosts (`deferred()`, whose forces are still incomplete) must not be used: the
+// level integrates the others first. Why: with one synchronisation per phase each rank waits
+// for the other in whichever phase it is faster (bench/SCALING.md section 4).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "parallel/communicator.hpp"
@@ -45,16 +54,40 @@ class GhostExchange {
   void build(ParticleStore& ps, const Domain& domain, const Decomposition& decomposition,
              const Communicator& comm, Real cutoff);
   void forward(ParticleStore& ps, const Communicator& comm);
-  void reverse(ParticleStore& ps, const Communicator& comm);
-  void clear() { stages_.clear(); }
+  void reverse(ParticleStore& ps, const Communicator& comm) {
+    reverse_begin(ps, comm);
+    reverse_end(ps, comm);
+  }
+  void reverse_begin(ParticleStore& ps, const Communicator& comm);
+  void reverse_end(ParticleStore& ps, const Communicator& comm);
+  // The owned particles whose forces reverse_end completes (empty without another rank), in
+  // increasing order, and the same as a per-owned-particle mask.
+  const std::vector<Index>& deferred() const { return deferred_; }
+  const std::vector<std::uint8_t>& deferred_mask() const { return deferred_mask_; }
+  void clear() {
+    stages_.clear();
+    split_ = 0;
+    deferred_.clear();
+    deferred_mask_.clear();
+  }
 
   const std::vector<GhostStage>& stages() const { return stages_; }
   // Checkpoints: the stages of a saved exchange (with the ghost slots restored alongside).
-  void set_stages(std::vector<GhostStage> stages) { stages_ = std::move(stages); }
+  void set_stages(std::vector<GhostStage> stages, Index n_owned, const Communicator& comm);
 
  private:
+  void find_deferred(Index n_owned, const Communicator& comm);
+
   std::vector<GhostStage> stages_;
   std::vector<Real> send_buffer_, recv_buffer_;
+  // reverse_begin does the stages from split_ on (those of the split axis in flight, with their
+  // buffers), reverse_end the ones before it.
+  std::size_t split_ = 0;
+  std::vector<std::size_t> in_flight_;
+  std::vector<std::vector<Real>> async_send_, async_recv_;
+  Requests requests_;
+  std::vector<Index> deferred_;
+  std::vector<std::uint8_t> deferred_mask_;
 };
 
 // Wraps owned particles into the box along periodic axes.

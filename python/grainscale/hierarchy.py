@@ -20,8 +20,9 @@ number of steps of every level). Every exchange interval (:class:`Exchange`), co
    fraction ratio when ``mass_flux_correction``), limited by the cell's velocity range, and
    (b) the coarse -> fine stress boundary condition, a PI controller per interface face
    (anti-windup, never pulling) whose pressure pushes the child's particles in a layer of
-   ~1.3 fine diameters (sin^2 fade) so that the child's normal stress per unit solid volume
-   (sigma / phi, the mean contact load per particle) in the boundary cell follows the parent's.
+   ~1.3 fine diameters (sin^2 fade) so that the child's normal stress in the boundary cell
+   follows the parent's; the child's stress there counts the push as the contacts it stands
+   for (its virial: push force times distance from the face).
 
 Python schedules; the per-particle work (flux meter, insertion, averaging, coupling forces) is in
 C++ (cpp/coupling, cpp/field). Under MPI every level is decomposed over the same communicator.
@@ -189,6 +190,9 @@ class _Coupled:
         self.integral = np.zeros(self.n_faces)
         self.pressure = np.zeros(self.n_faces)
         self.max_inward = np.zeros(self.n_faces)
+        # The pushed layer's virial per face (N m), summed over this interval's child samples.
+        self.push_moment = np.zeros(self.n_faces)
+        self.push_samples = 0
         self.acceleration = np.zeros((len(grid["inside"]), 3))
         self.parent_coupling = -1
         self.child_coupling = -1
@@ -443,12 +447,17 @@ class Hierarchy:
                 done += n
                 for c in touching:
                     c.interface.sample(sim._level, c.child == k)
+                    if c.child == k and c.child_coupling >= 0:
+                        c.push_moment += sim._level.coupling_push_moment(c.child_coupling)
+                        c.push_samples += 1
             for c in children:
                 c.flux = c.interface.finish_flux(sim._level)
         for c in self.couplings:
             c.parent_fields = c.interface.finish_average(self.sims[c.parent]._level, False)
             c.child_fields = c.interface.finish_average(self.sims[c.child]._level, True)
             self._control(c)
+            c.push_moment[:] = 0.0
+            c.push_samples = 0
         self.intervals += 1
         self._write_cells()
 
@@ -481,16 +490,23 @@ class Hierarchy:
             axes = c.grid["face_axis"].astype(int)
             normal = c.grid["face_normal"]
             sc = pf["stress"][cells, axes, axes]
-            sf = cf["stress"][cells, axes, axes]
+            # The fine cell's stress counts the push as the contacts with the material beyond
+            # the face it stands for (their virial, push force x distance from the face): the
+            # load the pushed layer passes on is what the coarse cell carries, not the cell
+            # average that ramps up from zero across the layer.
+            volume = float(np.prod(c.grid["edge"]))
+            key = cells * 3 + axes  # faces of one cell along one axis share its sigma_aa
+            moment = np.zeros(3 * len(inside))
+            np.add.at(moment, key, c.push_moment)
+            pushed = moment[key] / (max(c.push_samples, 1) * volume)
+            sf = cf["stress"][cells, axes, axes] + pushed
             phi_c, phi_f = pf["solid_fraction"][cells], cf["solid_fraction"][cells]
             active = (pf["mass"][cells] > 0) & (phi_c >= ex.skip_ratio * phi_f)
-            # What follows the coarse cell is the stress per unit solid volume, sigma / phi (the
-            # mean contact load per particle, DESIGN.md 4; invariant under CG scaling): a
-            # boundary cell that the fine level fills less densely than the coarse one (its
-            # insertion shell lags) is not pushed harder to make up for its empty part, which
-            # would overload the cells inside it.
-            with np.errstate(divide="ignore", invalid="ignore"):
-                target = np.where(active, sc * phi_f / phi_c, 0.0)
+            # The fine cell carries the coarse cell's normal stress (stress is invariant under CG
+            # scaling, and so the load passed into the region balances the coarse one's even
+            # where the fine level fills its boundary cell less densely); the variants measured
+            # (sigma / phi, the push's virial left out) are in docs/studies/mlcg_silo/NOTES.md.
+            target = np.where(active, sc, 0.0)
             error = np.where(active, target - sf, 0.0)
             trial = c.integral + error * T
             p = kp * error + ki * trial

@@ -2,9 +2,9 @@
 F2): a bin filled and settled, resolved and as a hierarchy with a resolved window at its bottom
 that feels the coarse bed above only through the stress boundary condition. The window's solid
 fraction follows the resolved run within 10 %; its vertical stress is checked at 25 % here, one
-seed (the issue's 10 % is not met yet: over three seeds the full-size study has 0.104, the
-window's inner cells carrying 8-10 % more than in the resolved run, docs/studies/mlcg_bin_fill);
-mass is accounted for exactly."""
+seed of a small bin (0.137 at the time of writing; a single resolved seed scatters by 7-10 %
+about the mean of others): the issue's 10 % is the full-size study's, over three seeds (0.065,
+docs/studies/mlcg_bin_fill); mass is accounted for exactly."""
 
 from __future__ import annotations
 
