@@ -52,7 +52,6 @@ Requests::~Requests() {
 }
 Requests::Requests(Requests&&) noexcept = default;
 Requests& Requests::operator=(Requests&&) noexcept = default;
-bool Requests::empty() const { return !list_ || list_->pending.empty(); }
 
 bool Communicator::mpi_available() {
 #ifdef GRAINSCALE_HAVE_MPI

@@ -30,7 +30,6 @@ class Requests {
   Requests& operator=(const Requests&) = delete;
   Requests(Requests&&) noexcept;
   Requests& operator=(Requests&&) noexcept;
-  bool empty() const;
 
  private:
   friend class Communicator;

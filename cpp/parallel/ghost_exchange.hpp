@@ -13,16 +13,17 @@
 //
 //   build   – creates the ghosts (full particle data) after the owned particles were migrated;
 //   forward – every step: positions (plus shift), velocities and spins into the ghost slots;
-//   reverse – stages in reverse order: ghost forces and torques added to the particles they
-//             mirror (which may be ghosts of an earlier stage, passed on in their own stage).
+//   reverse – (reverse_begin, then reverse_end) stages in reverse order: ghost forces and
+//             torques added to the particles they mirror (which may be ghosts of an earlier
+//             stage, passed on in their own stage).
 // Pairs are stored once (neighbor_list.hpp), so Newton's third law holds across ranks: a pair
 // between ranks is computed on the rank owning its particle with the smaller global id and the
-// partner's share travels back in `reverse`.
+// partner's share travels back in the reverse pass.
 //
-// reverse_begin / reverse_end split `reverse` so that the forces travel while the rank works:
-// begin does the stages of the axes after the last one with another rank (copies on the rank
-// itself) and starts that axis's messages; end waits for them and does the stages before it.
-// The same additions in the same order as `reverse`. Meanwhile only the owned particles that
+// The reverse pass is split so that the forces travel while the rank works: reverse_begin does
+// the stages of the axes after the last one with another rank (copies on the rank itself) and
+// starts that axis's messages; reverse_end waits for them and does the stages before it. In
+// between only the owned particles that
 // were sent as ghosts (`deferred()`, whose forces are still incomplete) must not be used: the
 // level integrates the others first. Why: with one synchronisation per phase each rank waits
 // for the other in whichever phase it is faster (bench/SCALING.md section 4).
@@ -54,10 +55,6 @@ class GhostExchange {
   void build(ParticleStore& ps, const Domain& domain, const Decomposition& decomposition,
              const Communicator& comm, Real cutoff);
   void forward(ParticleStore& ps, const Communicator& comm);
-  void reverse(ParticleStore& ps, const Communicator& comm) {
-    reverse_begin(ps, comm);
-    reverse_end(ps, comm);
-  }
   void reverse_begin(ParticleStore& ps, const Communicator& comm);
   void reverse_end(ParticleStore& ps, const Communicator& comm);
   // The owned particles whose forces reverse_end completes (empty without another rank), in
