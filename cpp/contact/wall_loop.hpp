@@ -125,6 +125,22 @@ inline void resolve_mesh_touches(const TriangleMesh& mesh, const ContactList& li
   }
 }
 
+// Requests the cache lines that the wall loop reads and writes for particle i.
+inline void prefetch_wall_row(const ParticleStore& ps, const ContactList& list, Index i, int S) {
+  const Index k = list.first[i];
+  __builtin_prefetch(ps.position.data() + i);
+  __builtin_prefetch(ps.velocity.data() + i);
+  __builtin_prefetch(ps.angular_velocity.data() + i);
+  __builtin_prefetch(ps.force.data() + i, 1);
+  __builtin_prefetch(ps.torque.data() + i, 1);
+  __builtin_prefetch(ps.radius.data() + i);
+  __builtin_prefetch(ps.mass.data() + i);
+  __builtin_prefetch(ps.material.data() + i);
+  __builtin_prefetch(list.partner.data() + k);
+  __builtin_prefetch(list.touching.data() + k, 1);
+  __builtin_prefetch(list.history.data() + static_cast<std::size_t>(k) * S, 1);
+}
+
 }  // namespace detail
 
 template <class Law, bool kUpdate, bool kStats>
@@ -135,9 +151,24 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
   std::vector<detail::MeshTouch> touches;
   std::vector<char> counted;
   const Index n = ps.n_owned();
+  // The particles with wall entries are a thin, scattered subset (those near a wall): they are
+  // listed first without branches (a branch per particle would mostly mispredict), and each
+  // one's data is requested kLead particles ahead, which overlaps the cache misses with the
+  // force work.
+  std::vector<Index>& rows = list.scratch_rows;
+  rows.resize(n);
+  Index n_rows = 0;
   for (Index i = 0; i < n; ++i) {
+    rows[n_rows] = i;
+    n_rows += list.first[i + 1] != list.first[i];
+  }
+  constexpr Index kLead = 4;
+  for (Index r = 0; r < std::min(kLead, n_rows); ++r)
+    detail::prefetch_wall_row(ps, list, rows[r], S);
+  for (Index r = 0; r < n_rows; ++r) {
+    if (r + kLead < n_rows) detail::prefetch_wall_row(ps, list, rows[r + kLead], S);
+    const Index i = rows[r];
     const Index b = list.first[i], e = list.first[i + 1];
-    if (b == e) continue;
     const Vec3 xi = ps.position[i];
     const Real ri = ps.radius[i];
 

@@ -27,8 +27,8 @@ inline void half_kick(Vec3& v, Vec3& w, const Vec3& f, const Vec3& t, Real hm, R
 
 // The pass over the particles `select` yields (kick_drift's body, shared by its variants).
 template <bool kPlanar, bool kClosingKick, class Select>
-inline Real kick_drift_over(ParticleStore& ps, Real dt, const Vec3& gravity,
-                            const std::vector<Vec3>& reference, Index count, Select select) {
+inline Real kick_drift_over(ParticleStore& ps, Real dt, const Vec3& gravity, Index count,
+                            Select select) {
   const Real half = 0.5 * dt;
   Vec3* x = ps.position.data();
   Vec3* v = ps.velocity.data();
@@ -38,42 +38,58 @@ inline Real kick_drift_over(ParticleStore& ps, Real dt, const Vec3& gravity,
   const Real* m = ps.mass.data();
   const Real* im = ps.inv_mass.data();
   const Real* ii = ps.inv_inertia.data();
-  Real max_d2 = 0;
+  Real max_v2 = 0;
   for (Index k = 0; k < count; ++k) {
     const Index i = select(k);
     if (i < 0) continue;
     const Real hm = half * im[i], hi = half * ii[i];
-    if constexpr (kClosingKick) half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
-    half_kick<kPlanar>(v[i], w[i], f[i], t[i], hm, hi);
-    x[i] += dt * v[i];  // v_z is exactly 0 in 2-D, so z is unchanged bit for bit
+    // On local copies: through the arrays the compiler must assume that they alias, and it
+    // stores and reloads v and w between the two half kicks (store-forwarding chains).
+    Vec3 vi = v[i], wi = w[i];
+    const Vec3 fi = f[i], ti = t[i];
+    if constexpr (kClosingKick) half_kick<kPlanar>(vi, wi, fi, ti, hm, hi);
+    half_kick<kPlanar>(vi, wi, fi, ti, hm, hi);
+    const Vec3 xi = x[i] + dt * vi;  // v_z is exactly 0 in 2-D, so z is unchanged bit for bit
+    x[i] = xi;
+    v[i] = vi;
+    w[i] = wi;
     f[i] = m[i] * gravity;
     t[i].setZero();
+    const Real v2 = vi.squaredNorm();
+    if (v2 > max_v2 || v2 != v2) max_v2 = v2;  // a NaN sticks, so it forces a (checked) rebuild
+  }
+  return max_v2;
+}
+
+Real max_displacement2(const ParticleStore& ps, const std::vector<Vec3>& reference) {
+  const Vec3* x = ps.position.data();
+  Real max_d2 = 0;
+  for (Index i = 0; i < ps.n_owned(); ++i) {
     const Real d2 = (x[i] - reference[i]).squaredNorm();
-    if (d2 > max_d2 || d2 != d2) max_d2 = d2;  // a NaN sticks, so it forces a (checked) rebuild
+    if (d2 > max_d2 || d2 != d2) max_d2 = d2;
   }
   return max_d2;
 }
 
 template <bool kPlanar, bool kClosingKick>
-Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
-                const std::vector<Vec3>& reference) {
-  return kick_drift_over<kPlanar, kClosingKick>(ps, dt, gravity, reference, ps.n_owned(),
+Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity) {
+  return kick_drift_over<kPlanar, kClosingKick>(ps, dt, gravity, ps.n_owned(),
                                                 [](Index k) { return k; });
 }
 
 template <bool kPlanar>
 Real kick_drift_except(ParticleStore& ps, Real dt, const Vec3& gravity,
-                       const std::vector<Vec3>& reference, const std::vector<std::uint8_t>& skip) {
+                       const std::vector<std::uint8_t>& skip) {
   const std::uint8_t* s = skip.data();
-  return kick_drift_over<kPlanar, true>(ps, dt, gravity, reference, ps.n_owned(),
+  return kick_drift_over<kPlanar, true>(ps, dt, gravity, ps.n_owned(),
                                         [s](Index k) { return s[k] ? Index(-1) : k; });
 }
 
 template <bool kPlanar>
 Real kick_drift_only(ParticleStore& ps, Real dt, const Vec3& gravity,
-                     const std::vector<Vec3>& reference, const std::vector<Index>& only) {
+                     const std::vector<Index>& only) {
   const Index* o = only.data();
-  return kick_drift_over<kPlanar, true>(ps, dt, gravity, reference, static_cast<Index>(only.size()),
+  return kick_drift_over<kPlanar, true>(ps, dt, gravity, static_cast<Index>(only.size()),
                                         [o](Index k) { return o[k]; });
 }
 
@@ -91,18 +107,16 @@ void kick(ParticleStore& ps, Real dt) {
     half_kick<kPlanar>(v[i], w[i], f[i], t[i], half * im[i], half * ii[i]);
 }
 
-template Real kick_drift<false, false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-template Real kick_drift<false, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-template Real kick_drift<true, false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-template Real kick_drift<true, true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&);
-template Real kick_drift_except<false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+template Real kick_drift<false, false>(ParticleStore&, Real, const Vec3&);
+template Real kick_drift<false, true>(ParticleStore&, Real, const Vec3&);
+template Real kick_drift<true, false>(ParticleStore&, Real, const Vec3&);
+template Real kick_drift<true, true>(ParticleStore&, Real, const Vec3&);
+template Real kick_drift_except<false>(ParticleStore&, Real, const Vec3&,
                                        const std::vector<std::uint8_t>&);
-template Real kick_drift_except<true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
+template Real kick_drift_except<true>(ParticleStore&, Real, const Vec3&,
                                       const std::vector<std::uint8_t>&);
-template Real kick_drift_only<false>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
-                                     const std::vector<Index>&);
-template Real kick_drift_only<true>(ParticleStore&, Real, const Vec3&, const std::vector<Vec3>&,
-                                    const std::vector<Index>&);
+template Real kick_drift_only<false>(ParticleStore&, Real, const Vec3&, const std::vector<Index>&);
+template Real kick_drift_only<true>(ParticleStore&, Real, const Vec3&, const std::vector<Index>&);
 template void kick<false>(ParticleStore&, Real);
 template void kick<true>(ParticleStore&, Real);
 

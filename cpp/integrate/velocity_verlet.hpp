@@ -20,24 +20,27 @@ namespace grainscale {
 
 // Opening half kick and drift of the owned particles, preceded by the previous step's closing
 // half kick when kClosingKick; afterwards f = m g and tau = 0 (the start of the next force
-// evaluation). Returns the largest squared displacement from `reference` (positions at the last
-// neighbour-list build).
+// evaluation). Returns the largest squared drift velocity |v|^2 (NaN if any is NaN): dt times
+// its root bounds every particle's move in this step, which spares the pass reading the positions
+// at the last neighbour-list build (max_displacement2) on most steps.
 template <bool kPlanar, bool kClosingKick>
-Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity,
-                const std::vector<Vec3>& reference);
+Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity);
 
 // The same pass in two parts, for a force evaluation whose ghost forces are still travelling
 // (GhostExchange::reverse_begin): first every owned particle with skip[i] == 0, then, once
 // the forces are complete, those in `only`. Per particle the same operations as kick_drift.
 template <bool kPlanar>
 Real kick_drift_except(ParticleStore& ps, Real dt, const Vec3& gravity,
-                       const std::vector<Vec3>& reference, const std::vector<std::uint8_t>& skip);
+                       const std::vector<std::uint8_t>& skip);
 template <bool kPlanar>
 Real kick_drift_only(ParticleStore& ps, Real dt, const Vec3& gravity,
-                     const std::vector<Vec3>& reference, const std::vector<Index>& only);
+                     const std::vector<Index>& only);
 
-// The larger of two displacements from kick_drift, NaN winning.
-inline Real max_displacement(Real a, Real b) { return (b > a || b != b) && a == a ? b : a; }
+// The larger of two results of kick_drift (or of max_displacement2), NaN winning.
+inline Real larger_or_nan(Real a, Real b) { return (b > a || b != b) && a == a ? b : a; }
+
+// The largest squared displacement of an owned particle from `reference` (NaN if any is NaN).
+Real max_displacement2(const ParticleStore& ps, const std::vector<Vec3>& reference);
 
 // Closing half kick (the last step of a run).
 template <bool kPlanar>

@@ -484,6 +484,7 @@ void Level::rebuild() {
   wall_carry_.clear();
 
   x_at_build_.assign(ps_.position.data(), ps_.position.data() + ps_.n_owned());
+  drift_bound_ = 0;
   wall_shift_.assign(walls_.size(), 0);
   lists_valid_ = true;
   ++rebuilds_;
@@ -544,20 +545,20 @@ void Level::run_with(const Law& law, std::int64_t steps) {
   for (std::int64_t s = 0; s < steps; ++s) {
     // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
     // which also resets the owned forces to m g.
-    Real max_d2;
+    Real max_v2;
     if (reverse_pending_) {
       // The particles whose forces are complete move first, the others once theirs arrived.
-      max_d2 = kick_drift_except<kPlanar>(ps_, dt_, gravity_, x_at_build_, ghosts_.deferred_mask());
+      max_v2 = kick_drift_except<kPlanar>(ps_, dt_, gravity_, ghosts_.deferred_mask());
       {
         const ScopedTimer timer(halo_seconds_);
         ghosts_.reverse_end(ps_, comm_);
       }
       reverse_pending_ = false;
-      max_d2 = max_displacement(
-          max_d2, kick_drift_only<kPlanar>(ps_, dt_, gravity_, x_at_build_, ghosts_.deferred()));
+      max_v2 =
+          larger_or_nan(max_v2, kick_drift_only<kPlanar>(ps_, dt_, gravity_, ghosts_.deferred()));
     } else {
-      max_d2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_, x_at_build_)
-                      : kick_drift<kPlanar, true>(ps_, dt_, gravity_, x_at_build_);
+      max_v2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_)
+                      : kick_drift<kPlanar, true>(ps_, dt_, gravity_);
     }
     Real wall_shift = 0;
     for (std::size_t k = 0; k < walls_.size(); ++k) {
@@ -570,14 +571,28 @@ void Level::run_with(const Law& law, std::int64_t steps) {
     // Inserted particles start with zero force: then the owned forces are set again.
     const bool owned_reset = lists_valid_;
     // One reduction decides for all ranks (a rank that inserted or removed particles counts as
-    // having moved infinitely far; NaN becomes infinity too).
-    const Real moved2 = lists_valid_ ? max_d2 : INFINITY;
-    Real moved2_all;
+    // having moved infinitely far; NaN becomes infinity too). The list is rebuilt when a
+    // particle has moved more than half the skin since the last build: the drift speeds bound
+    // the displacements, and only when the bound reaches half the skin are they measured (the
+    // same decisions as measuring every step, without reading the build positions each step).
+    Real speed2_all;
     {
       const ScopedTimer timer(halo_seconds_);
-      moved2_all = comm_.max(moved2);
+      speed2_all = comm_.max(lists_valid_ ? max_v2 : INFINITY);
     }
-    if (!(std::sqrt(moved2_all) + wall_shift <= half_skin)) {
+    drift_bound_ += dt_ * std::sqrt(speed2_all);
+    bool stale = !(drift_bound_ + wall_shift <= half_skin);
+    if (stale && std::isfinite(speed2_all)) {
+      const Real moved2 = max_displacement2(ps_, x_at_build_);
+      Real moved2_all;
+      {
+        const ScopedTimer timer(halo_seconds_);
+        moved2_all = comm_.max(moved2);
+      }
+      drift_bound_ = std::sqrt(moved2_all);
+      stale = !(drift_bound_ + wall_shift <= half_skin);
+    }
+    if (stale) {
       rebuild();
     } else {
       const ScopedTimer timer(halo_seconds_);

@@ -247,6 +247,10 @@ class Level {
   std::int64_t balanced_at_step_ = 0;
   bool any_servo_ = false;
   std::vector<Vec3> x_at_build_;
+  // Upper bound of any owned particle's displacement from x_at_build_ (m): the drift speeds'
+  // sum over the steps since the build, tightened to the exact maximum whenever it is checked.
+  // Infinite until known (after a checkpoint load), so the first step checks exactly.
+  Real drift_bound_ = INFINITY;
   // Rebuild scratch kept between rebuilds: fresh large buffers would cost page faults each time.
   std::vector<Index> scratch_order_, scratch_index_;
   std::vector<GlobalId> scratch_keys_;

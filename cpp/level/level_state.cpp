@@ -2,6 +2,7 @@
 // rebuild and set-up force evaluation — exactly what the next run() would do first — so the
 // saved state is the one a continuing run steps from.
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -361,6 +362,7 @@ void Level::load_state(const LevelState& s) {
 
   x_at_build_.resize(no);
   get(s, "lists/x_at_build", x_at_build_.data(), no);
+  drift_bound_ = INFINITY;  // not saved: the first step measures the displacements exactly
   get_list(s, "lists/pairs", pairs_);
   get_list(s, "lists/walls", wall_contacts_);
   for (auto p : pairs_.partner)

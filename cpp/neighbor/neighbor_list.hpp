@@ -30,6 +30,7 @@ struct ContactList {
   // Build scratch kept between rebuilds (fresh large buffers cost page faults each time).
   std::vector<std::pair<Index, Index>> scratch_pairs;
   std::vector<Index> scratch_count;
+  std::vector<Index> scratch_rows;  // the wall loop's particles with entries
 
   std::size_t size() const { return partner.size(); }
 };
