@@ -35,12 +35,8 @@ from typing import Any
 
 import numpy as np
 
-
-def _quoteattr(value: str) -> str:
-    """``value`` as a double-quoted XML attribute (&, <, >, " and whitespace escaped). Written
-    here because xml.sax.saxutils pulls in urllib, http, email and ssl (about 13 MiB and 25 ms
-    at import)."""
-    table = {
+_ATTRIBUTE_ESCAPES = str.maketrans(
+    {
         "&": "&amp;",
         "<": "&lt;",
         ">": "&gt;",
@@ -49,7 +45,14 @@ def _quoteattr(value: str) -> str:
         "\r": "&#13;",
         "\t": "&#9;",
     }
-    return '"' + "".join(table.get(ch, ch) for ch in value) + '"'
+)
+
+
+def _quoteattr(value: str) -> str:
+    """``value`` as a double-quoted XML attribute (&, <, >, " and whitespace escaped). Written
+    here because xml.sax.saxutils pulls in urllib, http, email and ssl (about 6.6 MiB of peak
+    memory and 25 ms at import)."""
+    return '"' + value.translate(_ATTRIBUTE_ESCAPES) + '"'
 
 
 __all__ = ["VTK", "PVDSeries", "write_pvtp", "write_vtp", "write_vtp_mesh"]
