@@ -226,7 +226,8 @@ void export_level(py::module_& m) {
       .def("wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); })
       .def("wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); })
       .def("wall_point", [](Level& l, int i) { return from_vec3(l.walls().at(i).point); })
-      .def("run", &Level::run, py::arg("steps"), py::call_guard<py::gil_scoped_release>())
+      .def("run", &Level::run, py::arg("steps"), py::arg("stats") = true,
+           py::call_guard<py::gil_scoped_release>())
       .def_property("record_contacts", &Level::record_contacts, &Level::set_record_contacts)
       .def("mark_positions_changed", &Level::mark_positions_changed)
       .def("mark_velocities_changed", &Level::mark_velocities_changed)

@@ -72,6 +72,14 @@ class ContactModel {
 
   [[gnu::always_inline]] inline ContactOutput force(const Pair& p, const ContactInput& c,
                                                     Real* history) const {
+    // The stored springs follow the contact's rotation (both at once where there are two).
+    Eigen::Map<Vec3> tangential_spring(history + kTangentialOffset);
+    if constexpr (Rolling::kSpring) {
+      Eigen::Map<Vec3> rolling_spring(history + kRollingOffset);
+      rotate_into_tangent_plane(tangential_spring, rolling_spring, c.normal);
+    } else {
+      rotate_into_tangent_plane(tangential_spring, c.normal);
+    }
     const NormalState ns = Normal::evaluate(p.normal, c, history);
     const Real vn = c.v_rel.dot(c.normal);
     Real fn = ns.spring - p.damping * std::sqrt(ns.damping_stiffness * c.m_eff) * vn;

@@ -15,9 +15,11 @@ namespace grainscale {
 
 // kUpdate = false evaluates forces on a scratch copy of the history (set-up evaluations must
 // not advance the tangential springs). kStats fills `stats`.
+// flatten: everything the law calls is inlined. Left to its heuristics, GCC stops inlining
+// small Eigen expressions in the larger laws (EEPA, EPSD), and each call costs more than it does.
 template <class Law, bool kUpdate, bool kStats>
-void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list, Real dt,
-                            ContactStats& stats) {
+[[gnu::flatten]] void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list,
+                                             Real dt, ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();

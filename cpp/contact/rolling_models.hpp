@@ -8,7 +8,8 @@
 //   around zero rolling velocity — the defect EPSD removes (CASES.md A6).
 // EPSD (elastic–plastic spring–dashpot; Ai, Chen, Rotter & Ooi 2011, Powder Technol. 206:269;
 //   LIGGGHTS rolling_model_epsd.h): k_r = 2.25 k_n mu_r^2 R*^2,
-//   M_k += -k_r w_r dt (history, kept in the tangent plane), |M_k| <= mu_r R* |F_n|;
+//   M_k += -k_r w_r dt (history, rotated into the tangent plane by the law together with the
+//   tangential spring), |M_k| <= mu_r R* |F_n|;
 //   M_d = -eta_r 2 sqrt(I_r k_r) w_r only while M_k is below the limit.
 // EPSD2 (LIGGGHTS epsd2): as EPSD with k_r = k_t R*^2 and no damping.
 #pragma once
@@ -35,6 +36,7 @@ struct NoRolling {
   static constexpr const char* kName = "none";
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = false;
+  static constexpr bool kSpring = false;
   [[gnu::always_inline]] static Vec3 evaluate(const RollingPair&, const RollingContext&,
                                               const ContactInput&, Real*) {
     return Vec3::Zero();
@@ -49,6 +51,7 @@ struct CDTRolling {
   static constexpr const char* kName = "cdt";
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = true;
+  static constexpr bool kSpring = false;
   [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
                                               const ContactInput& c, Real*) {
     const Vec3 wr = rolling_velocity(c);
@@ -63,6 +66,7 @@ struct SpringDashpotRolling {
   static constexpr const char* kName = kEPSD2 ? "epsd2" : "epsd";
   static constexpr int kHistorySize = 3;  // spring torque M_k (3-vector)
   static constexpr bool kActive = true;
+  static constexpr bool kSpring = true;  // the history is a tangent-plane vector
   [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
                                               const ContactInput& c, Real* history) {
     const Vec3 wr = rolling_velocity(c);
@@ -70,7 +74,6 @@ struct SpringDashpotRolling {
     const Real kr = kEPSD2 ? k.tangential_stiffness * r2
                            : 2.25 * k.normal_stiffness * p.friction * p.friction * r2;
     Eigen::Map<Vec3> spring(history);
-    rotate_into_tangent_plane(spring, c.normal);
     spring -= (kr * c.dt) * wr;
     const Real limit = p.friction * c.r_eff * std::abs(k.normal_force);
     const Real m2 = spring.squaredNorm();  // the square root only when the limit is reached

@@ -6,21 +6,22 @@
 //   sliding) and the stored spring is truncated to match. A tensile (damping-dominated) normal
 //   force carries no friction, so the tangential impulse never exceeds mu times the compressive
 //   normal impulse.
-// The stored spring (xi or F_s) follows the contact: each step its normal component is removed
-// and its magnitude restored.
+// The stored spring (xi or F_s) follows the contact: each step, before evaluate(), the law
+// removes its normal component and restores its magnitude (rotate_into_tangent_plane).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
 #include "contact/contact_input.hpp"
+#include "core/packed_math.hpp"
 
 namespace grainscale {
 
 enum class TangentialHistory { Total, Incremental };
 
 // Removes the normal component of a stored tangential vector and restores its magnitude.
-inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
+[[gnu::always_inline]] inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
   const Real sn = s.dot(n);
   if (sn == 0) return;
   const Real old2 = s.squaredNorm();
@@ -29,15 +30,31 @@ inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
   if (new2 > 0) s *= std::sqrt(old2 / new2);
 }
 
+// The same for two vectors of one contact (tangential and rolling spring), bit for bit as two
+// calls of the above, with both rescale factors from one two-lane division and square root:
+// they are the longest latency of a rolling contact.
+[[gnu::always_inline]] inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& a,
+                                                             Eigen::Map<Vec3>& b, const Vec3& n) {
+  const Real an = a.dot(n), bn = b.dot(n);
+  if (an == 0 && bn == 0) return;
+  const Real a_old2 = a.squaredNorm(), b_old2 = b.squaredNorm();
+  const Vec3 at = a - an * n, bt = b - bn * n;
+  const Real a_new2 = at.squaredNorm(), b_new2 = bt.squaredNorm();
+  // A lane with new2 = 0 yields inf or NaN here and is not used.
+  const RealPair scale = sqrt_ratio2(a_old2, a_new2, b_old2, b_new2);
+  if (an != 0) a = a_new2 > 0 ? Vec3(at * scale.first) : at;
+  if (bn != 0) b = b_new2 > 0 ? Vec3(bt * scale.second) : bt;
+}
+
 struct MindlinTangential {
   static constexpr int kHistorySize = 3;  // spring (3-vector)
 
-  // Force on i. kt, gt: stiffness and damping; ft_max = mu max(F_n, 0).
+  // Force on i. kt, gt: stiffness and damping; ft_max = mu max(F_n, 0). The spring in
+  // `history` has been rotated into the current tangent plane.
   [[gnu::always_inline]] static Vec3 evaluate(TangentialHistory form, Real kt, Real gt, Real ft_max,
                                               const ContactInput& c, const Vec3& vt,
                                               Real* history) {
     Eigen::Map<Vec3> spring(history);
-    rotate_into_tangent_plane(spring, c.normal);
     const bool total = form == TangentialHistory::Total;
     Vec3 ft;
     if (total) {

@@ -150,18 +150,11 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
   constexpr int S = Law::kHistorySize;
   std::vector<detail::MeshTouch> touches;
   std::vector<char> counted;
-  const Index n = ps.n_owned();
-  // The particles with wall entries are a thin, scattered subset (those near a wall): they are
-  // listed first without branches (a branch per particle would mostly mispredict), and each
-  // one's data is requested kLead particles ahead, which overlaps the cache misses with the
-  // force work.
-  std::vector<Index>& rows = list.scratch_rows;
-  rows.resize(n);
-  Index n_rows = 0;
-  for (Index i = 0; i < n; ++i) {
-    rows[n_rows] = i;
-    n_rows += list.first[i + 1] != list.first[i];
-  }
+  // The particles with wall entries are a thin, scattered subset (those near a wall), listed at
+  // the build (list.rows); each one's data is requested kLead particles ahead, which overlaps
+  // the cache misses with the force work.
+  const std::vector<Index>& rows = list.rows;
+  const Index n_rows = static_cast<Index>(rows.size());
   constexpr Index kLead = 4;
   for (Index r = 0; r < std::min(kLead, n_rows); ++r)
     detail::prefetch_wall_row(ps, list, rows[r], S);

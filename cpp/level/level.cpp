@@ -531,7 +531,7 @@ void Level::compute_forces(const Law& law, bool defer_reverse) {
 }
 
 template <bool kPlanar, class Law>
-void Level::run_with(const Law& law, std::int64_t steps) {
+void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
   // Ranks agree first: one rank's particles changed from Python means every rank rebuilds.
   // A set-up evaluation with valid lists first refreshes the ghosts: their velocities are those
   // of the last force evaluation, not of the closing kick or of changes made from Python.
@@ -599,25 +599,31 @@ void Level::run_with(const Law& law, std::int64_t steps) {
       ghosts_.forward(ps_, comm_);
     }
     // Only a step followed by another in this run leaves its ghost forces travelling.
-    if (s + 1 == steps)
+    const bool last = s + 1 == steps;
+    if (last && stats)
       compute_forces<Law, true, true, false>(law);
     else if (owned_reset)
-      compute_forces<Law, true, false, true>(law, true);
+      compute_forces<Law, true, false, true>(law, !last);
     else
-      compute_forces<Law, true, false, false>(law, true);
+      compute_forces<Law, true, false, false>(law, !last);
+  }
+  // The wall loads are read after a run: summed over the ranks at the last step in any case.
+  if (steps > 0 && !stats && comm_.parallel() && !any_servo_) {
+    const ScopedTimer timer(halo_seconds_);
+    reduce_wall_loads();
   }
   if (steps > 0) kick<kPlanar>(ps_, dt_);
 }
 
-void Level::run(std::int64_t steps) {
+void Level::run(std::int64_t steps, bool stats) {
   if (steps < 0) throw_invalid("Simulation.run.steps", "non-negative", steps);
   prepare();
   std::visit(
       [&](const auto& law) {
         if (dimension_ == 2)
-          run_with<true>(law, steps);
+          run_with<true>(law, steps, stats);
         else
-          run_with<false>(law, steps);
+          run_with<false>(law, steps, stats);
       },
       law_);
 }

@@ -100,8 +100,10 @@ class Level {
   // --- end parallel runs ---
 
   // --- running ---
-  // Collective.
-  void run(std::int64_t steps);
+  // Collective. stats: fill last_stats() (contact count, largest overlap, records) at the last
+  // step; without, last_stats() keeps what an earlier run left (Simulation.run asks for them
+  // only where a thermo line, an output or the caller reads them).
+  void run(std::int64_t steps, bool stats = true);
   // Tells the level that Python changed positions (needs a rebuild) or velocities (forces
   // are recomputed, without advancing contact histories, before the next step).
   void mark_positions_changed();
@@ -177,7 +179,7 @@ class Level {
 
  private:
   template <bool kPlanar, class Law>
-  void run_with(const Law& law, std::int64_t steps);
+  void run_with(const Law& law, std::int64_t steps, bool stats);
   // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
   template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
   // defer_reverse: leaves the ghost forces travelling (GhostExchange::reverse_begin); the next

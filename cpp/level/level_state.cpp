@@ -62,6 +62,7 @@ void get_list(const LevelState& s, const std::string& key, ContactList& l) {
       l.history.size() != l.partner.size() * static_cast<std::size_t>(l.history_stride))
     throw std::runtime_error("checkpoint contact list '" + key +
                              "' does not match this contact law's history size");
+  index_rows(l);
 }
 
 // Ghost stages: per stage axis, dir, send_to, recv_from, recv_first, recv_count, n_send, then

@@ -78,6 +78,18 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff,
   list.touching.assign(list.partner.size(), 0);
 }
 
+void index_rows(ContactList& list) {
+  // Branch-free: a branch per particle would mostly mispredict.
+  const Index n = list.first.empty() ? 0 : static_cast<Index>(list.first.size()) - 1;
+  list.rows.resize(n);
+  Index n_rows = 0;
+  for (Index i = 0; i < n; ++i) {
+    list.rows[n_rows] = i;
+    n_rows += list.first[i + 1] != list.first[i];
+  }
+  list.rows.resize(n_rows);
+}
+
 void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
                      const std::vector<Index>& primitive_first, Real skin, ContactList& list) {
   const Index n = ps.n_owned();
@@ -105,6 +117,7 @@ void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
   list.first[n] = static_cast<Index>(list.partner.size());
   list.history.assign(list.partner.size() * list.history_stride, 0.0);
   list.touching.assign(list.partner.size(), 0);
+  index_rows(list);
 }
 
 }  // namespace grainscale

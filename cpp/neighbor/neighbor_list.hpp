@@ -30,10 +30,15 @@ struct ContactList {
   // Build scratch kept between rebuilds (fresh large buffers cost page faults each time).
   std::vector<std::pair<Index, Index>> scratch_pairs;
   std::vector<Index> scratch_count;
-  std::vector<Index> scratch_rows;  // the wall loop's particles with entries
+  // The owned particles that have entries, ascending (index_rows). The wall loop walks only
+  // these: near walls they are a thin, scattered subset.
+  std::vector<Index> rows;
 
   std::size_t size() const { return partner.size(); }
 };
+
+// Fills list.rows from list.first: after a build and after a list is loaded.
+void index_rows(ContactList& list);
 
 // Builds the particle half list from a grid binned over all local (owned + ghost) particles.
 // cutoff: the largest pair cut-off, 2 r_max + skin over the local particles (sets the stencil).

@@ -186,6 +186,7 @@ class Simulation:
         self._wall_spin: dict[int, tuple[float, float, float]] = {}
         self._header_printed = False
         self._rate_clock = (_time.perf_counter(), 0)
+        self._chunk = 1  # steps per C++ call in run(), adapted to the step cost
         self._streams: list[StreamHandle] = []  # insertion and outlets
         self._outlets: list[OutletHandle] = []
 
@@ -759,7 +760,6 @@ class Simulation:
             bar = tqdm(total=target - self.step, unit="step", leave=False)
         self._rate_clock = (_time.perf_counter(), self.step)
         self._python_step(lambda: self._start_outputs(dt))
-        chunk = 1
         try:
             while self.step < target:
                 stop = target
@@ -767,18 +767,23 @@ class Simulation:
                     stop = min(stop, due)
                 if self.thermo_every:
                     stop = min(stop, (self.step // self.thermo_every + 1) * self.thermo_every)
-                n = min(stop - self.step, chunk)
+                n = min(stop - self.step, self._chunk)
+                # Contact statistics cost a pass of their own: only where they are read (the end
+                # of the run, a thermo line, an output).
+                stats = n == stop - self.step
                 t0 = _time.perf_counter()
-                self._level.run(n)
+                self._level.run(n, stats)
                 elapsed = _time.perf_counter() - t0
-                # Grow chunks while they are short, so Ctrl-C and the bar stay responsive. Under
-                # MPI every rank must take the same chunks: rank 0's timing decides.
+                # Chunks of 0.25-1 s (the size carries over to the next run): Ctrl-C and the bar
+                # stay responsive, and the cost of a chunk boundary (statistics, a separate
+                # closing kick) is spread over many steps. Under MPI every rank must take the
+                # same chunks: rank 0's timing decides.
                 if self._comm is not None:
                     elapsed = self._comm.bcast(elapsed, root=0)
-                if elapsed < 0.05 and n == chunk:
-                    chunk = min(2 * chunk, 100000)
-                elif elapsed > 0.2 and chunk > 1:
-                    chunk //= 2
+                if elapsed < 0.25 and n == self._chunk:
+                    self._chunk = min(2 * self._chunk, 100000)
+                elif elapsed > 1.0 and self._chunk > 1:
+                    self._chunk //= 2
                 if bar is not None:
                     bar.update(n)
                 # Outputs, then thermo (its reductions are collective): each step agreed on.
