@@ -6,7 +6,9 @@ R = 40 mm, on a 30-degree cone to an open outlet of radius 10 mm), N spheres (d 
 rho = 2500 kg/m^3) on a seeded jittered lattice inside it, outlet open from the start: the
 packing collapses under gravity and discharges; particles are deleted when they cross the box
 floor 3 mm below the outlet. Hertz-Mindlin with tangential history (E = 1e7 Pa, nu = 0.3,
-e = 0.5, mu = 0.5; the mesh of the particle material), dt = 1e-5 s, skin 0.2 mm.
+e = 0.5, mu = 0.5; the mesh of the particle material), dt = 1e-5 s, skin 0.2 mm; the tangential
+spring projected onto the new tangent plane each step as in LIGGGHTS (``--spring-rotation
+rescale``: grainscale's default law, which also keeps the spring's length).
 
 The STL and the initial state are generated once per size and fed to both codes (LIGGGHTS:
 data file + ``fix mesh/surface`` + ``fix wall/gran ... mesh``; grainscale: .npz +
@@ -445,6 +447,13 @@ def main(argv: list[str] | None = None) -> int:
         "the floor, checked every 'every' steps)",
     )
     parser.add_argument("--seed", type=int, default=HopperCase.seed)
+    parser.add_argument(
+        "--spring-rotation",
+        choices=("project", "rescale"),
+        default=HopperCase.spring_rotation,
+        help="grainscale's tangential spring rotation: 'project' as LIGGGHTS' tangential history "
+        "(default), 'rescale' grainscale's default law",
+    )
     parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
     parser.add_argument("--keep", action="store_true", help="keep the generated input files")
     args = parser.parse_args(argv)
@@ -464,10 +473,16 @@ def main(argv: list[str] | None = None) -> int:
             check_grainscale()
         entries: dict[str, dict[str, Any]] = {}
         for n in args.sizes:
-            case = HopperCase(n_particles=n, steps=args.steps, seed=args.seed)
+            case = HopperCase(
+                n_particles=n,
+                steps=args.steps,
+                seed=args.seed,
+                spring_rotation=args.spring_rotation,
+            )
             print(
                 f"hopper N = {n}: {case.n_triangles} triangles, R = {case.hopper_radius * 1e3:g} "
-                f"mm, outlet r = {case.outlet_radius * 1e3:g} mm, {case.steps} steps",
+                f"mm, outlet r = {case.outlet_radius * 1e3:g} mm, {case.steps} steps, "
+                f"grainscale springs: {case.spring_rotation}",
                 flush=True,
             )
             try:

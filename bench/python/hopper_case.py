@@ -59,6 +59,9 @@ class HopperCase:
     time_step: float = 1.0e-5
     skin: float = 0.2e-3
     gravity: float = 9.81
+    # grainscale's spring rotation: "project" is LIGGGHTS' tangential history model (the spring
+    # projected onto the new tangent plane), "rescale" grainscale's default (length kept)
+    spring_rotation: str = "project"
     # hopper geometry
     hopper_radius: float = 40.0e-3
     outlet_radius: float = 10.0e-3

@@ -5,7 +5,10 @@ N monodisperse spheres (d = 2 mm, rho = 2500 kg/m^3) start on a jittered simple-
 (spacing 2.2 mm, square cross-section of ceil((N/2)^(1/3)) sites, filled bottom-up) with small
 seeded random velocities, inside a closed box of six plane walls, and settle under gravity.
 Hertz-Mindlin contacts with tangential history (E = 1e7 Pa, nu = 0.3, e = 0.5, mu = 0.5, walls
-of the particle material), dt = 1e-5 s, skin 0.2 mm, 4000 steps by default.
+of the particle material), dt = 1e-5 s, skin 0.2 mm, 4000 steps by default. The tangential
+spring is projected onto the new tangent plane each step, as LIGGGHTS does
+(``spring_rotation="project"``); ``--spring-rotation rescale`` runs grainscale's default law,
+which also keeps the spring's length.
 
 The initial state is generated once per size with numpy and fed to both codes: a LIGGGHTS data
 file (atom_style granular, Atoms + Velocities) and an .npz file for ``sim.add_particles``.
@@ -257,6 +260,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", choices=CODES, default=None, help="run only one code")
     parser.add_argument("--seed", type=int, default=SettleCase.seed)
+    parser.add_argument(
+        "--spring-rotation",
+        choices=("project", "rescale"),
+        default=SettleCase.spring_rotation,
+        help="grainscale's tangential spring rotation: 'project' as LIGGGHTS' tangential history "
+        "(default), 'rescale' grainscale's default law",
+    )
     parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
     parser.add_argument("--keep", action="store_true", help="keep the generated input files")
     args = parser.parse_args(argv)
@@ -270,11 +280,17 @@ def main(argv: list[str] | None = None) -> int:
             check_grainscale()
         entries: dict[str, dict[str, Any]] = {}
         for n in args.sizes:
-            case = SettleCase(n_particles=n, steps=args.steps, seed=args.seed)
+            case = SettleCase(
+                n_particles=n,
+                steps=args.steps,
+                seed=args.seed,
+                spring_rotation=args.spring_rotation,
+            )
             lx, ly, lz = (1e3 * v for v in case.box_hi)
             print(
                 f"settle N = {n}: {case.n_side}^2 x {case.n_layers} lattice, "
-                f"box {lx:.1f} x {ly:.1f} x {lz:.1f} mm",
+                f"box {lx:.1f} x {ly:.1f} x {lz:.1f} mm, grainscale springs: "
+                f"{case.spring_rotation}",
                 flush=True,
             )
             entries[str(n)] = bench_size(case, codes, args.repeats, liggghts_exe, args.keep)

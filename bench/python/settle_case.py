@@ -45,6 +45,9 @@ class SettleCase:
     time_step: float = 1.0e-5
     skin: float = 0.2e-3
     gravity: float = 9.81
+    # grainscale's spring rotation: "project" is LIGGGHTS' tangential history model (the spring
+    # projected onto the new tangent plane), "rescale" grainscale's default (length kept)
+    spring_rotation: str = "project"
 
     @property
     def n_side(self) -> int:

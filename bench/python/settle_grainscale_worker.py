@@ -132,6 +132,7 @@ def liggghts_matched_simulation(
         limit_force=False,  # LIGGGHTS default: limitForce off
         tangential_damping=True,  # LIGGGHTS hertz: tangential damping on
         tangential_history="total",  # LIGGGHTS 'tangential history': F_t = -k_t(delta) xi
+        spring_rotation=case.spring_rotation,  # "project": as LIGGGHTS' tangential history
     )
     sim = gs.Simulation(
         domain=gs.Box(lo=lo, hi=hi, periodic=(False, False, False)),

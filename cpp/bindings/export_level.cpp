@@ -92,15 +92,16 @@ void export_level(py::module_& m) {
       .def(
           "set_contact_law",
           [](Level& l, const std::string& normal, const std::string& rolling, bool limit_force,
-             bool tangential_damping, bool incremental) {
+             bool tangential_damping, bool incremental, bool project_springs) {
             ContactSettings s;
             s.limit_force = limit_force;
             s.tangential_damping = tangential_damping;
             s.history = incremental ? TangentialHistory::Incremental : TangentialHistory::Total;
+            s.spring_rotation = project_springs ? SpringRotation::Project : SpringRotation::Rescale;
             l.set_contact_law(make_contact_law(normal, rolling, s));
           },
           py::arg("normal"), py::arg("rolling"), py::arg("limit_force"),
-          py::arg("tangential_damping"), py::arg("incremental"))
+          py::arg("tangential_damping"), py::arg("incremental"), py::arg("project_springs") = false)
       .def("contact_law_name", [](Level& l) { return law_name(l.contact_law()); })
       .def("set_interaction", &Level::set_interaction, py::arg("i"), py::arg("j"),
            py::arg("interaction"))

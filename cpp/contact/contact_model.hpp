@@ -29,6 +29,7 @@ struct ContactSettings {
   bool limit_force = false;  // clamp F_n >= 0 (no tension from damping or adhesion)
   bool tangential_damping = true;
   TangentialHistory history = TangentialHistory::Total;
+  SpringRotation spring_rotation = SpringRotation::Rescale;  // tangential and rolling springs
 };
 
 template <class Normal, class Damping, class Rolling>
@@ -76,9 +77,16 @@ class ContactModel {
     Eigen::Map<Vec3> tangential_spring(history + kTangentialOffset);
     if constexpr (Rolling::kSpring) {
       Eigen::Map<Vec3> rolling_spring(history + kRollingOffset);
-      rotate_into_tangent_plane(tangential_spring, rolling_spring, c.normal);
-    } else {
+      if (settings_.spring_rotation == SpringRotation::Rescale) {
+        rotate_into_tangent_plane(tangential_spring, rolling_spring, c.normal);
+      } else {
+        project_onto_tangent_plane(tangential_spring, c.normal);
+        project_onto_tangent_plane(rolling_spring, c.normal);
+      }
+    } else if (settings_.spring_rotation == SpringRotation::Rescale) {
       rotate_into_tangent_plane(tangential_spring, c.normal);
+    } else {
+      project_onto_tangent_plane(tangential_spring, c.normal);
     }
     const NormalState ns = Normal::evaluate(p.normal, c, history);
     const Real vn = c.v_rel.dot(c.normal);

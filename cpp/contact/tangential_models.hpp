@@ -7,7 +7,11 @@
 //   force carries no friction, so the tangential impulse never exceeds mu times the compressive
 //   normal impulse.
 // The stored spring (xi or F_s) follows the contact: each step, before evaluate(), the law
-// removes its normal component and restores its magnitude (rotate_into_tangent_plane).
+// removes its normal component (rotate_into_tangent_plane) and, by default, restores its
+// magnitude, so a pair turning rigidly keeps its spring (as LAMMPS pair granular does).
+// SpringRotation::Project only removes the normal component, as LIGGGHTS' tangential history
+// model does (tangential_model_history.h): the spring then shrinks by cos(theta) when the normal
+// turns by theta in a step, a second-order loss that saves a division and a square root.
 #pragma once
 
 #include <algorithm>
@@ -19,6 +23,7 @@
 namespace grainscale {
 
 enum class TangentialHistory { Total, Incremental };
+enum class SpringRotation { Rescale, Project };
 
 // Removes the normal component of a stored tangential vector and restores its magnitude.
 [[gnu::always_inline]] inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
@@ -28,6 +33,12 @@ enum class TangentialHistory { Total, Incremental };
   s -= sn * n;
   const Real new2 = s.squaredNorm();
   if (new2 > 0) s *= std::sqrt(old2 / new2);
+}
+
+// Removes the normal component only (SpringRotation::Project).
+[[gnu::always_inline]] inline void project_onto_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
+  const Real sn = s.dot(n);
+  if (sn != 0) s -= sn * n;
 }
 
 // The same for two vectors of one contact (tangential and rolling spring), bit for bit as two

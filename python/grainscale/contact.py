@@ -154,6 +154,7 @@ class _Law:
     limit_force: bool = False
     tangential_damping: bool = True
     tangential_history: Literal["total", "incremental"] = "total"
+    spring_rotation: Literal["rescale", "project"] = "rescale"
     pairs: Mapping[tuple[Material | None, Material | None], Pair] = field(default_factory=dict)
 
     _normal: ClassVar[str] = ""
@@ -174,6 +175,11 @@ class _Law:
             raise ValueError(
                 f"{owner}.tangential_history must be 'total' or 'incremental', "
                 f"got {self.tangential_history!r}"
+            )
+        if self.spring_rotation not in ("rescale", "project"):
+            raise ValueError(
+                f"{owner}.spring_rotation must be 'rescale' or 'project', "
+                f"got {self.spring_rotation!r}"
             )
         for key, value in dict(self.pairs).items():
             ok = (
@@ -201,6 +207,7 @@ class _Law:
             bool(self.limit_force),
             bool(self.tangential_damping),
             self.tangential_history == "incremental",
+            self.spring_rotation == "project",
         )
 
     def _law_values(self) -> dict[str, float]:
@@ -254,6 +261,12 @@ class HertzMindlin(_Law):
         tangential_damping: apply the tangential dashpot while sticking.
         tangential_history: "total" (F_t = -k_t xi, LIGGGHTS "history", the default) or
             "incremental" (dF_t = -k_t dxi, recommended by Thornton et al. 2011).
+        spring_rotation: how the tangential (and rolling) spring follows the contact normal each
+            step: "rescale" (projected onto the new tangent plane, its length kept: a pair
+            turning rigidly keeps its spring, as in LAMMPS pair granular; the default) or
+            "project" (projected only, as LIGGGHTS' tangential history model: the spring
+            shrinks by cos(theta) for a turn theta per step; a little faster, and the choice
+            for reproducing a LIGGGHTS run).
         pairs: per-material-pair overrides (see the module docstring).
     """
 

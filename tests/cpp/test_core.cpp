@@ -5,7 +5,10 @@
 //   pair_list_brute      – build_pair_list equals an O(N^2) search (2000 random polydisperse
 //                          1:3 particles, shuffled global ids, with and without a cell cap);
 //   history_carry        – HistoryCarry save/restore keeps histories across a permutation;
-//   material_validation  – MaterialTable rejects poisson_ratio 0.7 with the documented message.
+//   material_validation  – MaterialTable rejects poisson_ratio 0.7 with the documented message;
+//   spring_rotation      – a spring turned with its contact: "rescale" keeps the length and lies
+//                          in the new tangent plane, "project" shortens it by cos(theta), and
+//                          the two-vector rotation equals two single ones bit for bit.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +29,7 @@
 #include "contact/contact_stats.hpp"
 #include "contact/interaction.hpp"
 #include "contact/pair_loop.hpp"
+#include "contact/tangential_models.hpp"
 #include "core/errors.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -362,6 +366,35 @@ void test_material_validation() {
   CHECK(accepted_zero && table.n_materials() == 1, "poisson_ratio 0 was rejected");
 }
 
+void test_spring_rotation() {
+  g_test = "spring_rotation";
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 n0 = Vec3(u(rng), u(rng), u(rng)).normalized();
+    // A spring in the old tangent plane and a new normal turned by theta.
+    const Vec3 s0 = (Vec3(u(rng), u(rng), u(rng)).cross(n0)) * (1e-6 * (1 + trial));
+    const Real theta = 1e-4 * (1 + trial % 50);
+    const Vec3 axis = Vec3(u(rng), u(rng), u(rng)).normalized();
+    const Vec3 n = Eigen::AngleAxis<Real>(theta, axis) * n0;
+    Real a_data[3] = {s0[0], s0[1], s0[2]}, b_data[3], p_data[3] = {s0[0], s0[1], s0[2]};
+    const Vec3 r0 = (Vec3(u(rng), u(rng), u(rng)).cross(n0)) * 1e-3;
+    Real r_data[3] = {r0[0], r0[1], r0[2]}, r_single[3] = {r0[0], r0[1], r0[2]};
+    std::copy(a_data, a_data + 3, b_data);
+    Eigen::Map<Vec3> a(a_data), b(b_data), p(p_data), r(r_data), rs(r_single);
+    gs::rotate_into_tangent_plane(a, n);
+    CHECK(std::abs(a.norm() / s0.norm() - 1) < 1e-14, "rescale changed the length");
+    CHECK(std::abs(a.dot(n)) < 1e-14 * s0.norm(), "rescaled spring not in the tangent plane");
+    gs::rotate_into_tangent_plane(b, r, n);
+    gs::rotate_into_tangent_plane(rs, n);
+    CHECK(a == b && r == rs, "two-vector rotation differs from two single rotations");
+    gs::project_onto_tangent_plane(p, n);
+    const Real expected = std::sqrt(1 - std::pow(s0.normalized().dot(n), 2));
+    CHECK(std::abs(p.norm() / s0.norm() - expected) < 1e-12, "projection length not |s| cos");
+    CHECK(std::abs(p.dot(n)) < 1e-14 * s0.norm(), "projected spring not in the tangent plane");
+  }
+}
+
 }  // namespace
 
 int main() {
@@ -370,6 +403,7 @@ int main() {
       {"pair_list_brute", test_pair_list_brute},
       {"history_carry", test_history_carry},
       {"material_validation", test_material_validation},
+      {"spring_rotation", test_spring_rotation},
   };
   for (const auto& [name, fn] : tests) {
     const int before = g_failures;

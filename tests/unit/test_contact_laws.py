@@ -77,24 +77,32 @@ def settle_packing():
     return gs.insert.random_in_box(SETTLE_BOX, radii, seed=11), radii
 
 
-def _settle_law(normal: str, rolling: str):
-    kw = {"restitution": 0.5, "friction": 0.5}
+def _settle_law(normal: str, rolling: str, spring_rotation: str = "rescale"):
+    kw = {"restitution": 0.5, "friction": 0.5, "spring_rotation": spring_rotation}
     if normal == "eepa":
         # Adhesive EEPA: k1 = 2 E* R* ~ 3e3 N/m, pull-off ~ 0.2 m g of a sphere.
         kw.update(unloading_ratio=3.0, adhesive_stiffness=100.0, pull_off_force=-2e-5)
     return _law(normal, rolling, **kw)
 
 
-@pytest.mark.parametrize("name", [f"{n}+{r}" for n, r in itertools.product(NORMALS, ROLLINGS)])
+# Every law, and two with the springs only projected (LIGGGHTS' rotation) instead of rescaled.
+SETTLE_CASES = [f"{n}+{r}" for n, r in itertools.product(NORMALS, ROLLINGS)] + [
+    "hertz+epsd:project",
+    "eepa+epsd2:project",
+]
+
+
+@pytest.mark.parametrize("name", SETTLE_CASES)
 def test_every_law_settles(name, settle_packing):
     pos, radii = settle_packing
-    normal, rolling = name.split("+")
+    law_name, _, spring_rotation = name.partition(":")
+    normal, rolling = law_name.split("+")
     pad = 1e-3
     sim = gs.Simulation(
         domain=gs.Box(
             lo=tuple(x - pad for x in SETTLE_BOX.lo), hi=tuple(x + pad for x in SETTLE_BOX.hi)
         ),
-        contact=_settle_law(normal, rolling),
+        contact=_settle_law(normal, rolling, spring_rotation or "rescale"),
         thermo_every=10**9,
         quiet=True,
     )
@@ -150,6 +158,10 @@ INVALID = [
     (lambda: HertzMindlin(friction=-0.1), r"HertzMindlin\.friction must be non-negative"),
     (lambda: HertzMindlin(rolling=0.1), r"HertzMindlin\.rolling must be None, CDT, EPSD"),
     (lambda: HertzMindlin(tangential_history="x"), r"tangential_history must be 'total'"),
+    (
+        lambda: HertzMindlin(spring_rotation="keep"),
+        r"HertzMindlin\.spring_rotation must be 'rescale' or 'project', got 'keep'",
+    ),
     (lambda: EPSD(-0.1), r"EPSD\.rolling_friction must be non-negative.*got -0\.1"),
     (lambda: EPSD(0.1, -0.3), r"EPSD\.rolling_damping must be non-negative"),
     (lambda: CDT(-1), r"CDT\.rolling_friction must be non-negative"),
