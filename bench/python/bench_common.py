@@ -9,6 +9,7 @@ the machine is shared and noisy.
 
 from __future__ import annotations
 
+import argparse
 import datetime as dt
 import json
 import os
@@ -47,6 +48,17 @@ class Run(Protocol):
 
 # ---------------------------------------------------------------------------------------------
 # set-up
+
+
+def add_spring_rotation_option(parser: argparse.ArgumentParser, default: str) -> None:
+    """--spring-rotation: how grainscale's tangential spring follows the contact normal."""
+    parser.add_argument(
+        "--spring-rotation",
+        choices=("project", "rescale"),
+        default=default,
+        help="grainscale's tangential spring rotation: 'project' as LIGGGHTS' tangential history "
+        "(default), 'rescale' grainscale's default law",
+    )
 
 
 def ensure_liggghts() -> str:

@@ -49,6 +49,7 @@ import numpy as np
 from bench_common import (
     CODES,
     BenchmarkError,
+    add_spring_rotation_option,
     check_grainscale,
     ensure_liggghts,
     failure,
@@ -447,13 +448,7 @@ def main(argv: list[str] | None = None) -> int:
         "the floor, checked every 'every' steps)",
     )
     parser.add_argument("--seed", type=int, default=HopperCase.seed)
-    parser.add_argument(
-        "--spring-rotation",
-        choices=("project", "rescale"),
-        default=HopperCase.spring_rotation,
-        help="grainscale's tangential spring rotation: 'project' as LIGGGHTS' tangential history "
-        "(default), 'rescale' grainscale's default law",
-    )
+    add_spring_rotation_option(parser, HopperCase.spring_rotation)
     parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
     parser.add_argument("--keep", action="store_true", help="keep the generated input files")
     args = parser.parse_args(argv)

@@ -43,6 +43,7 @@ import numpy as np
 from bench_common import (
     CODES,
     BenchmarkError,
+    add_spring_rotation_option,
     check_grainscale,
     ensure_liggghts,
     paired_ratios,
@@ -260,13 +261,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", choices=CODES, default=None, help="run only one code")
     parser.add_argument("--seed", type=int, default=SettleCase.seed)
-    parser.add_argument(
-        "--spring-rotation",
-        choices=("project", "rescale"),
-        default=SettleCase.spring_rotation,
-        help="grainscale's tangential spring rotation: 'project' as LIGGGHTS' tangential history "
-        "(default), 'rescale' grainscale's default law",
-    )
+    add_spring_rotation_option(parser, SettleCase.spring_rotation)
     parser.add_argument("--output", type=Path, default=DEFAULT_OUTPUT, help="JSON results file")
     parser.add_argument("--keep", action="store_true", help="keep the generated input files")
     args = parser.parse_args(argv)
