@@ -77,16 +77,9 @@ class ContactModel {
     Eigen::Map<Vec3> tangential_spring(history + kTangentialOffset);
     if constexpr (Rolling::kSpring) {
       Eigen::Map<Vec3> rolling_spring(history + kRollingOffset);
-      if (settings_.spring_rotation == SpringRotation::Rescale) {
-        rotate_into_tangent_plane(tangential_spring, rolling_spring, c.normal);
-      } else {
-        project_onto_tangent_plane(tangential_spring, c.normal);
-        project_onto_tangent_plane(rolling_spring, c.normal);
-      }
-    } else if (settings_.spring_rotation == SpringRotation::Rescale) {
-      rotate_into_tangent_plane(tangential_spring, c.normal);
+      follow_normal(settings_.spring_rotation, tangential_spring, rolling_spring, c.normal);
     } else {
-      project_onto_tangent_plane(tangential_spring, c.normal);
+      follow_normal(settings_.spring_rotation, tangential_spring, c.normal);
     }
     const NormalState ns = Normal::evaluate(p.normal, c, history);
     const Real vn = c.v_rel.dot(c.normal);

@@ -57,6 +57,24 @@ enum class SpringRotation { Rescale, Project };
   if (bn != 0) b = b_new2 > 0 ? Vec3(bt * scale.second) : bt;
 }
 
+// Turns the stored spring(s) of a contact with its normal, as `how` says (the law's setting).
+[[gnu::always_inline]] inline void follow_normal(SpringRotation how, Eigen::Map<Vec3>& s,
+                                                 const Vec3& n) {
+  if (how == SpringRotation::Rescale)
+    rotate_into_tangent_plane(s, n);
+  else
+    project_onto_tangent_plane(s, n);
+}
+[[gnu::always_inline]] inline void follow_normal(SpringRotation how, Eigen::Map<Vec3>& a,
+                                                 Eigen::Map<Vec3>& b, const Vec3& n) {
+  if (how == SpringRotation::Rescale) {
+    rotate_into_tangent_plane(a, b, n);
+  } else {
+    project_onto_tangent_plane(a, n);
+    project_onto_tangent_plane(b, n);
+  }
+}
+
 struct MindlinTangential {
   static constexpr int kHistorySize = 3;  // spring (3-vector)
 

@@ -768,8 +768,8 @@ class Simulation:
                 if self.thermo_every:
                     stop = min(stop, (self.step // self.thermo_every + 1) * self.thermo_every)
                 n = min(stop - self.step, self._chunk)
-                # Contact statistics cost a pass of their own: only where they are read (the end
-                # of the run, a thermo line, an output).
+                # Contact statistics slow the step that gathers them (and are summed over the
+                # ranks): only where they are read (the end of the run, a thermo line, an output).
                 stats = n == stop - self.step
                 t0 = _time.perf_counter()
                 self._level.run(n, stats)
