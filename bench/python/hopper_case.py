@@ -225,24 +225,45 @@ def initial_state(case: HopperCase) -> tuple[FloatArray, FloatArray]:
 # LIGGGHTS input
 
 
-def write_liggghts_data(path: Path, case: HopperCase, pos: FloatArray, vel: FloatArray) -> None:
-    """Write a LIGGGHTS data file (atom_style granular) with Atoms and Velocities sections."""
+def write_granular_data(
+    path: Path,
+    title: str,
+    box: tuple[Any, Any],
+    diameter: FloatArray,
+    density: FloatArray,
+    pos: FloatArray,
+    vel: FloatArray,
+    spin: FloatArray | None = None,
+) -> None:
+    """Write a LIGGGHTS data file (atom_style granular, one atom type) with Atoms and
+    Velocities sections; ``box`` = (lo, hi) corners, per-atom diameter and density arrays."""
     n = len(pos)
-    lo, hi = case.box_lo, case.box_hi
     ids = np.arange(1, n + 1, dtype=np.float64)
-    atoms = np.column_stack(
-        [ids, np.ones(n), np.full(n, case.diameter), np.full(n, case.density), pos]
-    )
-    vels = np.column_stack([ids, vel, np.zeros((n, 3))])
+    atoms = np.column_stack([ids, np.ones(n), diameter, density, pos])
+    vels = np.column_stack([ids, vel, np.zeros((n, 3)) if spin is None else spin])
     with path.open("w") as f:
-        f.write(f"LIGGGHTS data file, grainscale hopper benchmark, N = {n}, seed = {case.seed}\n\n")
-        f.write(f"{n} atoms\n1 atom types\n\n")
-        for axis, a, b in zip("xyz", lo, hi, strict=True):
+        f.write(f"{title}\n\n{n} atoms\n1 atom types\n\n")
+        for axis, a, b in zip("xyz", box[0], box[1], strict=True):
             f.write(f"{a!r} {b!r} {axis}lo {axis}hi\n")
         f.write("\nAtoms\n\n")
         np.savetxt(f, atoms, fmt=["%d", "%d", "%.17g", "%.17g", "%.17g", "%.17g", "%.17g"])
         f.write("\nVelocities\n\n")
         np.savetxt(f, vels, fmt=["%d"] + ["%.17g"] * 6)
+
+
+def write_liggghts_data(path: Path, case: HopperCase, pos: FloatArray, vel: FloatArray) -> None:
+    """Write the LIGGGHTS data file of the case (atom_style granular)."""
+    n = len(pos)
+    title = f"LIGGGHTS data file, grainscale hopper benchmark, N = {n}, seed = {case.seed}"
+    write_granular_data(
+        path,
+        title,
+        (case.box_lo, case.box_hi),
+        np.full(n, case.diameter),
+        np.full(n, case.density),
+        pos,
+        vel,
+    )
 
 
 def liggghts_input(case: HopperCase, data_file: str, stl_file: str) -> str:

@@ -126,15 +126,11 @@ def liggghts_input(case: SettleCase, data_file: str, thermo_every: int = 1000) -
     return liggghts_script("settle", case, data_file, wall_lines, thermo_every, lost="error")
 
 
-def liggghts_script(
-    name: str, case: Any, data_file: str, wall_lines: str, thermo_every: int, lost: str
-) -> str:
-    """The LIGGGHTS 3.8 input shared by the benchmarks: one particle type, Hertz with tangential
-    history, gravity along -z, the given wall fixes, nve/sphere, thermo of atoms, KE, rotational
-    KE and mean z. ``case`` has the fields of SettleCase's physics (n_particles, skin, moduli,
-    restitution, friction, time_step, gravity, steps); ``lost``: LIGGGHTS' thermo_modify lost."""
+def liggghts_preamble(title: str, data_file: str, skin: float) -> str:
+    """The first lines of every LIGGGHTS input here: SI units, granular atoms, closed box,
+    ``newton off`` and ghost velocities (both required by LIGGGHTS), the data file, the skin."""
     return f"""\
-# grainscale '{name}' benchmark, N = {case.n_particles}
+# {title}
 units           si
 atom_style      granular
 atom_modify     map array
@@ -142,9 +138,22 @@ boundary        f f f
 newton          off
 communicate     single vel yes
 read_data       {data_file}
-neighbor        {case.skin!r} bin
+neighbor        {skin!r} bin
 neigh_modify    delay 0
+"""
 
+
+def liggghts_script(
+    name: str, case: Any, data_file: str, wall_lines: str, thermo_every: int, lost: str
+) -> str:
+    """The LIGGGHTS 3.8 input shared by the benchmarks: one particle type, Hertz with tangential
+    history, gravity along -z, the given wall fixes, nve/sphere, thermo of atoms, KE, rotational
+    KE and mean z. ``case`` has the fields of SettleCase's physics (n_particles, skin, moduli,
+    restitution, friction, time_step, gravity, steps); ``lost``: LIGGGHTS' thermo_modify lost."""
+    preamble = liggghts_preamble(f"grainscale '{name}' benchmark, N = {case.n_particles}",
+                                 data_file, case.skin)  # fmt: skip
+    return f"""\
+{preamble}
 fix m1 all property/global youngsModulus peratomtype {case.youngs_modulus!r}
 fix m2 all property/global poissonsRatio peratomtype {case.poisson_ratio!r}
 fix m3 all property/global coefficientRestitution peratomtypepair 1 {case.restitution!r}

@@ -144,3 +144,16 @@ def test_annulus_floor_has_the_orifice_area() -> None:
     # the hole (a 72-gon) has the area of the circle of radius r_in
     assert outer - area == pytest.approx(math.pi * r_in**2, rel=1e-9)
     assert np.hypot(v[:, 0], v[:, 1]).max() == pytest.approx(r_out)
+
+
+def test_material_options_reach_the_case() -> None:
+    args = sd.build_parser().parse_args(
+        ["--youngs-modulus", "3e6", "--friction", "0.3", "--rolling-friction", "0"]
+    )
+    case, orifices = sd.case_from_args(args)
+    assert (case.youngs_modulus, case.friction, case.rolling_friction) == (3e6, 0.3, 0.0)
+    assert case.time_step is None and len(orifices) == len(sd.DEFAULT_ORIFICES_MM)
+    law = case.contact_law()
+    assert law.friction == 0.3 and law.rolling is not None and law.rolling.rolling_friction == 0.0
+    default, _ = sd.case_from_args(sd.build_parser().parse_args([]))
+    assert default == sd.SiloCase()

@@ -642,6 +642,36 @@ def silo_setup(case: SiloCase, orifice: float, seed: int = 1) -> SiloSetup:
     return SiloSetup(reference, params, scaled, silo, top, pour_time, d)
 
 
+def pour_and_settle(
+    sim: gs.Simulation,
+    case: SiloCase,
+    setup: SiloSetup,
+    clock: _Clock | None = None,
+    progress: bool = False,
+) -> list[str]:
+    """Pour the stream of ``setup`` into the closed silo of ``sim`` and let the bed settle
+    (rms speed below ``case.settle_speed``, between ``min_settle`` and ``max_settle`` s after
+    the pour); return notes on anything unusual. ``clock`` counts the particle-steps."""
+    clock = clock if clock is not None else _Clock(sim)
+    stream = sim.streams[0]
+    fall = math.sqrt(2 * setup.top / G)
+    clock.run(setup.pour_time + fall, progress)
+    while stream.pending_count > 0 and sim.time < setup.pour_time + case.max_settle:
+        clock.run(sim.time + 0.01)
+    t_settle0 = sim.time
+    clock.run(t_settle0 + case.min_settle)
+    with sim.particles(writable=False) as p:
+        mass0 = float(p.mass.sum())
+    while sim.time < t_settle0 + case.max_settle:
+        if math.sqrt(2 * sim.kinetic_energy() / mass0) < case.settle_speed:
+            break
+        clock.run(sim.time + 0.02)
+    v_rms = math.sqrt(2 * sim.kinetic_energy() / mass0)
+    if v_rms >= case.settle_speed:
+        return [f"bed not fully settled at opening: rms speed {v_rms:.3g} m/s"]
+    return []
+
+
 def run_orifice(
     case: SiloCase,
     orifice: float,
@@ -664,13 +694,7 @@ def run_orifice(
     say = log if log is not None else (lambda _s: None)
     t_clock = time.perf_counter()
     setup = silo_setup(case, orifice, seed)
-    params, d, silo, top, pour_time = (
-        setup.params,
-        setup.detail,
-        setup.silo,
-        setup.top,
-        setup.pour_time,
-    )
+    params, d, silo, top = setup.params, setup.detail, setup.silo, setup.top
     R = 0.5 * silo
     sim = gs.scaling.build_simulation(params, quiet=True)
     stream, outlet = sim.streams[0], sim.outlets[0]
@@ -684,24 +708,8 @@ def run_orifice(
         Path(output).mkdir(parents=True, exist_ok=True)
         gs.io.write_vtp_mesh(Path(output) / "silo_cylinder.vtp", v, t)
 
-    # ----- pour, then settle
     clock = _Clock(sim)
-    fall = math.sqrt(2 * top / G)
-    clock.run(pour_time + fall, progress)
-    while stream.pending_count > 0 and sim.time < pour_time + case.max_settle:
-        clock.run(sim.time + 0.01)
-    t_settle0 = sim.time
-    clock.run(t_settle0 + case.min_settle)
-    with sim.particles(writable=False) as p:
-        mass0 = float(p.mass.sum())
-    while sim.time < t_settle0 + case.max_settle:
-        if math.sqrt(2 * sim.kinetic_energy() / mass0) < case.settle_speed:
-            break
-        clock.run(sim.time + 0.02)
-    notes = []
-    v_rms = math.sqrt(2 * sim.kinetic_energy() / mass0)
-    if v_rms >= case.settle_speed:
-        notes.append(f"bed not fully settled at opening: rms speed {v_rms:.3g} m/s")
+    notes = pour_and_settle(sim, case, setup, clock, progress)
     with sim.particles(writable=False) as p:
         inventory = float(p.mass.sum())
         n0 = len(p)
@@ -722,7 +730,7 @@ def run_orifice(
     sim.set_wall_motion(SHUTTER, velocity=(0.0, 0.0, 0.0))
     clogged = False
     last_mass, last_change = outlet.removed_mass, sim.time
-    refill = _Refill(case, seed, size, R - 2 * size.max, height, mass0 / n0, glass)
+    refill = _Refill(case, seed, size, R - 2 * size.max, height, inventory / n0, glass)
     chunk = case.refill_every if case.constant_head else 0.05
     while True:
         elapsed = sim.time - t_open
@@ -1618,6 +1626,33 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"least length of the steady window, constant head (default "
         f"{SiloCase.measure_time:g} s)",
     )
+    material = parser.add_argument_group("material (defaults: the study's)")
+    material.add_argument(
+        "--youngs-modulus",
+        type=float,
+        default=None,
+        metavar="PA",
+        help=f"Young's modulus (default {SiloCase.youngs_modulus:g} Pa)",
+    )
+    material.add_argument(
+        "--friction",
+        type=float,
+        default=None,
+        help=f"sliding friction, particles and walls (default {SiloCase.friction:g})",
+    )
+    material.add_argument(
+        "--rolling-friction",
+        type=float,
+        default=None,
+        help=f"EPSD rolling friction (default {SiloCase.rolling_friction:g})",
+    )
+    material.add_argument(
+        "--time-step",
+        type=float,
+        default=None,
+        metavar="S",
+        help="time step (default 0.2 x the Rayleigh time of the smallest sphere)",
+    )
     parser.add_argument(
         "--seeds",
         type=int,
@@ -1680,6 +1715,9 @@ def case_from_args(args: argparse.Namespace) -> tuple[SiloCase, list[float]]:
         base["fill_height"] = None
     if args.vtk_every is not None:
         base["vtk_every"] = args.vtk_every
+    for name in ("youngs_modulus", "friction", "rolling_friction", "time_step"):
+        if getattr(args, name) is not None:
+            base[name] = getattr(args, name)
     orifices = args.orifices or (QUICK_ORIFICES_MM if args.quick else DEFAULT_ORIFICES_MM)
     if args.seeds is not None and args.seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
