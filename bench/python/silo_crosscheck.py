@@ -12,7 +12,9 @@ closed. The settled bed (positions, radii, velocities, spins) is written once an
 start from it with the orifice open and no shutter: cylinder (LIGGGHTS: ``zcylinder``
 primitive), the annulus floor from the same binary STL, Hertz-Mindlin with tangential history
 and EPSD rolling friction (LIGGGHTS ``rolling_friction epsd``), the study's material (walls of
-the particle material), time step and skin. Contact histories of the settled bed are not carried
+the particle material), time step and skin. One known difference in the law: LIGGGHTS keeps the
+EPSD rolling spring as accumulated (rolling_model_epsd.h), grainscale turns it with the contact
+normal. Contact histories of the settled bed are not carried
 over (LIGGGHTS cannot read them), in either code. Both codes run concurrently, one core each.
 
 Discharged mass = initial mass - mass above the floor plane (LIGGGHTS ``mass(all,above)``, the
@@ -23,7 +25,7 @@ successive orifices, ln(W_b / W_a) / ln(D0_b / D0_a), is printed with the ratio 
 Usage: python bench/python/silo_crosscheck.py [--orifices 24 40 64] [--seed 1]
                                               [--height-ratio 1.0] [--spring-rotation project]
                                               [--friction 0.5] [--rolling-friction 0.05]
-Results: bench/results/silo_crosscheck.json.
+Results: bench/results/silo_crosscheck.json (``--output`` to change).
 """
 
 from __future__ import annotations
