@@ -193,23 +193,35 @@ void export_coupling(py::module_& m) {
              }
              it.feed(f);
            })
+      .def(
+          "allow_top_up",
+          [](Interface& it, py::array_t<Real, py::array::c_style | py::array::forcecast> mass,
+             py::array_t<Real, py::array::c_style | py::array::forcecast> velocity) {
+            auto& ins = it.inserters();
+            const auto m = reals(mass, ins.size(), "top-up mass");
+            const auto v = vec3_rows(velocity, ins.size(), "top-up velocity");
+            for (std::size_t k = 0; k < ins.size(); ++k) ins[k].allow_top_up(m[k], v[k]);
+          },
+          py::arg("mass"), py::arg("velocity"))
       .def("insert", &Interface::insert, py::arg("child"), py::call_guard<py::gil_scoped_release>())
       .def("inserter_status",
            [](const Interface& it) {
              const auto& ins = it.inserters();
              std::vector<Real> fed(ins.size()), inserted(ins.size()), pending(ins.size()),
-                 count(ins.size());
+                 count(ins.size()), topped(ins.size());
              for (std::size_t k = 0; k < ins.size(); ++k) {
                fed[k] = ins[k].fed_mass();
                inserted[k] = ins[k].inserted_mass();
                pending[k] = ins[k].pending_mass();
                count[k] = static_cast<Real>(ins[k].inserted_count());
+               topped[k] = ins[k].topped_up_mass();
              }
              py::dict d;
              d["fed_mass"] = vector_of(fed);
              d["inserted_mass"] = vector_of(inserted);
              d["pending_mass"] = vector_of(pending);
              d["inserted_count"] = vector_of(count);
+             d["topped_up_mass"] = vector_of(topped);
              return d;
            })
       .def("inserter_states",

@@ -19,7 +19,9 @@ FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
   e2[c] = grid.edge[c];
   const Vec3 corner = face.centre - 0.5 * e1 - 0.5 * e2;
   const Real depth = std::min(4 * radius.max_radius(), grid.edge[a]);
-  shell_ = Region::parallelepiped(corner, e1, e2, depth * face.normal);
+  // From r_min outside the face: centres reach the face (see the header).
+  const Real out = radius.min_radius();
+  shell_ = Region::parallelepiped(corner - out * face.normal, e1, e2, (depth + out) * face.normal);
   next_ = radius_.sample(rng_);
 }
 
@@ -36,14 +38,36 @@ void FluxInserter::feed(Real mass, const Vec3& velocity, const Vec3& spin) {
   }
 }
 
-void FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
-                         std::vector<Vec3>& position, std::vector<Real>& radius) {
+std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
+                                std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
   place_pending(pending_, shell_, 50, rng_, grid, walls, position, radius);
   for (std::size_t k = before; k < radius.size(); ++k) {
     inserted_mass_ += mass_of(radius[k]);
     ++inserted_count_;
   }
+  const std::size_t from_flux = radius.size() - before;
+  if (!(top_up_ > 0) || !pending_.empty()) {  // flux first: no top-up while it still waits
+    top_up_ = 0;
+    return from_flux;
+  }
+  // Extra particles up to the budget, placed by the same rule as the flux's (give up after a
+  // run of failures); what finds no room lapses with the budget.
+  std::vector<Real> extra;
+  for (Real budget = top_up_;;) {
+    const Real r = radius_.sample(rng_);
+    if (mass_of(r) > budget) break;
+    budget -= mass_of(r);
+    extra.push_back(r);
+  }
+  top_up_ = 0;
+  const std::size_t start = radius.size();
+  place_pending(extra, shell_, 50, rng_, grid, walls, position, radius);
+  for (std::size_t k = start; k < radius.size(); ++k) {
+    topped_up_mass_ += mass_of(radius[k]);
+    ++topped_up_count_;
+  }
+  return from_flux;
 }
 
 Real FluxInserter::pending_mass() const {
@@ -55,9 +79,10 @@ Real FluxInserter::pending_mass() const {
 std::string FluxInserter::save_state() const {
   std::ostringstream out;
   out.precision(std::numeric_limits<Real>::max_digits10);
-  out << "flux-v1 " << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' ' << inserted_mass_ << ' '
-      << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1] << ' ' << velocity_[2] << ' '
-      << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2];
+  out << "flux-v2 " << topped_up_mass_ << ' ' << topped_up_count_ << ' ' << owed_ << ' ' << next_
+      << ' ' << fed_mass_ << ' ' << inserted_mass_ << ' ' << inserted_count_ << ' ' << velocity_[0]
+      << ' ' << velocity_[1] << ' ' << velocity_[2] << ' ' << spin_[0] << ' ' << spin_[1] << ' '
+      << spin_[2];
   write_pending(out, pending_, rng_);
   return out.str();
 }
@@ -65,21 +90,25 @@ std::string FluxInserter::save_state() const {
 void FluxInserter::load_state(const std::string& state) {
   std::istringstream in(state);
   std::string tag;
-  Real owed = 0, next = 0, fed = 0, inserted = 0;
-  std::int64_t count = 0;
+  Real owed = 0, next = 0, fed = 0, inserted = 0, topped = 0;
+  std::int64_t count = 0, topped_count = 0;
   Vec3 v, w;
-  in >> tag >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >>
-      w[2];
+  in >> tag;
+  if (tag == "flux-v2") in >> topped >> topped_count;  // v1: written before the top-up
+  in >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >> w[2];
   std::vector<Real> pending;
   Rng rng;
   read_pending(in, pending, rng);
-  if (tag != "flux-v1" || in.fail())
+  if ((tag != "flux-v1" && tag != "flux-v2") || in.fail())
     throw_invalid("FluxInserter state", "text written by save_state()", "'" + tag + " ...'");
   owed_ = owed;
   next_ = next;
   fed_mass_ = fed;
   inserted_mass_ = inserted;
   inserted_count_ = count;
+  topped_up_mass_ = topped;
+  topped_up_count_ = topped_count;
+  top_up_ = 0;
   velocity_ = v;
   spin_ = w;
   pending_.swap(pending);

@@ -283,14 +283,15 @@ std::int64_t Level::insert_flux(std::vector<FluxInserter>& inserters) {
     if (!f.waiting()) continue;
     x.clear();
     r.clear();
-    f.place(grid, walls, x, r);
+    const std::size_t from_flux = f.place(grid, walls, x, r);
     if (r.empty()) continue;
     const Index n = static_cast<Index>(r.size());
     std::vector<Real> flat(3 * n), v(3 * n), w(3 * n);
     for (Index k = 0; k < n; ++k)
       for (int a = 0; a < 3; ++a) {
         flat[3 * k + a] = x[k][a];
-        v[3 * k + a] = f.velocity()[a];
+        v[3 * k + a] =
+            static_cast<std::size_t>(k) < from_flux ? f.velocity()[a] : f.top_up_velocity()[a];
         w[3 * k + a] = f.spin()[a];
       }
     const std::vector<std::int32_t> mat(n, f.material());

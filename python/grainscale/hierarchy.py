@@ -11,9 +11,10 @@ number of steps of every level). Every exchange interval (:class:`Exchange`), co
 
 1. the parent runs the interval; its particles entering the child's region cells are booked per
    interface face (mass, momentum, spin), on an exchange grid generated from the region;
-2. the child receives that mass as fine particles placed in a shell just inside each face (what
-   finds no room waits; nothing is dropped), runs the interval, and deletes its particles that
-   leave the region cells;
+2. the child receives that mass as fine particles placed in a shell at each face (what finds no
+   room waits; nothing is dropped), plus, below a dense coarse bed, a top-up of what its boundary
+   cell lacks (booked apart), runs the interval, and deletes its particles that leave the region
+   cells;
 3. both levels average mass, Favre velocity, solid fraction and stress on the exchange cells;
    the controllers then set (a) the fine -> coarse velocity feedback, an acceleration of the
    parent's particles in the interior cells towards the child's Favre velocity (times the solid
@@ -22,7 +23,9 @@ number of steps of every level). Every exchange interval (:class:`Exchange`), co
    (anti-windup, never pulling) whose pressure pushes the child's particles in a layer of
    ~1.3 fine diameters (sin^2 fade) so that the child's normal stress in the boundary cell
    follows the parent's; the child's stress there counts the push as the contacts it stands
-   for (its virial: push force times distance from the face).
+   for (its virial: push force times distance from the face), and (c) the coarse -> fine
+   velocity condition, an acceleration of the child's particles in the boundary cells towards
+   the parent's Favre velocity (the shear and pace of the material beyond the faces).
 
 Python schedules; the per-particle work (flux meter, insertion, averaging, coupling forces) is in
 C++ (cpp/coupling, cpp/field). Under MPI every level is decomposed over the same communicator.
@@ -81,6 +84,20 @@ class Exchange:
         fade: width of its sin^2 fade, in largest fine diameters.
         skip_ratio: no stress control in a cell whose coarse solid fraction is below
             skip_ratio x the fine one (a nearly empty coarse cell has no stress to follow).
+        boundary_velocity_gain: fraction of the velocity difference coarse - fine removed per
+            interval in the fine level's boundary cells (Favre velocities, every component): the
+            shear and the pace the material beyond the faces imposes, which the normal push
+            cannot (without it a side face acts as a frictionless wall); 0 switches it off.
+        top_up: on the faces gravity points into, the fine level may place extra particles in
+            its insertion shell, up to top_up x the solid the coarse cell holds beyond the
+            fine one, (phi_c - phi_f) rho V per interval, in cells whose coarse solid fraction
+            is at least ``top_up_min_fraction``: the dense bed above a face sinks into the room
+            the fine bed leaves, which the coarse crossing flux does not see. Booked apart
+            (``topped_up`` in :meth:`Hierarchy.mass_balance`); 0 switches it off.
+        top_up_min_fraction: the coarse solid fraction from which a cell counts as a dense bed
+            (default 0.49, near the freezing point of hard spheres, 0.494: Hoover & Ree, J. Chem.
+            Phys. 49 (1968) 3609). A dilute stream is carried by the flux alone: its deficit
+            would be topped up again every interval while the same grains cross the cell.
     """
 
     cell_size: float | None = None
@@ -93,6 +110,9 @@ class Exchange:
     layer: float = 1.3
     fade: float = 0.25
     skip_ratio: float = 0.5
+    boundary_velocity_gain: float = 1.0
+    top_up: float = 1.0
+    top_up_min_fraction: float = 0.49
 
     def __post_init__(self) -> None:
         for name in ("cell_size", "every", "stress_integral"):
@@ -100,14 +120,27 @@ class Exchange:
                 positive("Exchange", name, getattr(self, name))
         if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
             raise ValueError(f"Exchange.samples must be a positive integer, got {self.samples!r}")
-        for name in ("velocity_gain", "stress_gain", "skip_ratio"):
+        for name in (
+            "velocity_gain",
+            "stress_gain",
+            "skip_ratio",
+            "boundary_velocity_gain",
+            "top_up",
+        ):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"Exchange.{name} must be non-negative and finite, got {v!r}")
-        if self.velocity_gain > 1:
-            raise ValueError(f"Exchange.velocity_gain must be in [0, 1], got {self.velocity_gain}")
+        for name in ("velocity_gain", "boundary_velocity_gain"):
+            if getattr(self, name) > 1:
+                raise ValueError(f"Exchange.{name} must be in [0, 1], got {getattr(self, name)}")
         positive("Exchange", "layer", self.layer, " (fine diameters)")
         positive("Exchange", "fade", self.fade, " (fine diameters)")
+        if not (
+            isinstance(self.top_up_min_fraction, int | float) and 0 <= self.top_up_min_fraction < 1
+        ):
+            raise ValueError(
+                f"Exchange.top_up_min_fraction must be in [0, 1), got {self.top_up_min_fraction!r}"
+            )
         if self.fade > self.layer:
             raise ValueError(f"Exchange.fade must be at most layer ({self.layer}), got {self.fade}")
 
@@ -173,6 +206,7 @@ def describe_balance(b: dict[str, float]) -> str:
         f"interface {b['parent']:g} -> {b['child']:g}: expected {b['expected'] * 1e3:.3f} g, "
         f"inserted {b['inserted'] * 1e3:.3f} g, pending {b['pending'] * 1e3:.4f} g, "
         f"unaccounted {b['unaccounted']:.2e} kg"
+        + (f"; topped up {b['topped_up'] * 1e3:.3f} g" if b.get("topped_up", 0) > 0 else "")
     )
 
 
@@ -194,6 +228,9 @@ class _Coupled:
         self.push_moment = np.zeros(self.n_faces)
         self.push_samples = 0
         self.acceleration = np.zeros((len(grid["inside"]), 3))
+        self.child_acceleration = np.zeros((len(grid["inside"]), 3))
+        self.top_up = np.zeros(self.n_faces)
+        self.top_up_velocity = np.zeros((self.n_faces, 3))
         self.parent_coupling = -1
         self.child_coupling = -1
         self.outlet = -1
@@ -377,9 +414,10 @@ class Hierarchy:
     def mass_balance(self) -> list[dict[str, float]]:
         """Collective: per interface, the mass (kg) the parent carried into the region
         (expected), inserted into the child, pending (scheduled or owed, not yet placed), the
-        child's particles deleted on leaving the region, the child's own outlets' removals, the
-        mass the child holds, and what is unaccounted for (expected - inserted - pending, zero
-        up to round-off)."""
+        top-up placed on top of the flux (``Exchange.top_up``), the child's particles deleted
+        on leaving the region, the child's own outlets' removals, the mass the child holds
+        (inserted + topped_up - deleted_leaving - removed_by_outlets), and what is unaccounted
+        for (expected - inserted - pending, zero up to round-off)."""
         out = []
         for c in self.couplings:
             s = c.interface.inserter_status()
@@ -398,6 +436,7 @@ class Hierarchy:
                     "expected": expected,
                     "inserted": inserted,
                     "pending": pending,
+                    "topped_up": float(s["topped_up_mass"].sum()),
                     "deleted_leaving": float(left),
                     "removed_by_outlets": float(own),
                     "held": held,
@@ -433,6 +472,7 @@ class Hierarchy:
             for c in self.couplings:
                 if c.child == k and c.flux is not None:
                     c.interface.feed(c.flux)
+                    c.interface.allow_top_up(c.top_up, c.top_up_velocity)
                     c.interface.insert(sim._level)
             children = [c for c in self.couplings if c.parent == k]
             for c in children:
@@ -482,6 +522,31 @@ class Hierarchy:
             du[~coupled] = 0.0
             c.acceleration = du / T
             psim._level.set_coupling_acceleration(c.parent_coupling, c.acceleration)
+        # Coarse -> fine top-up through the faces gravity points into: where the coarse cell
+        # is a dense bed holding more solid than the fine one, the fine level may fill its shell
+        # with up to top_up x the difference (booked apart from the flux in the mass balance).
+        if ex.top_up > 0:
+            cells = c.grid["face_cell"].astype(int)
+            g = np.asarray(self.base.gravity, float)
+            down = c.grid["face_normal"] @ g > 0
+            volume = float(np.prod(c.grid["edge"]))
+            phi_c = pf["solid_fraction"][cells]
+            deficit = np.maximum(phi_c - cf["solid_fraction"][cells], 0.0)
+            rho = float(self.material.density)
+            fed = down & (phi_c >= ex.top_up_min_fraction)
+            c.top_up = np.where(fed, ex.top_up * deficit * rho * volume, 0.0)
+            c.top_up_velocity = pf["velocity"][cells]
+        # Coarse -> fine, velocity condition: the boundary cells' velocity relaxed towards the
+        # coarse one. Every component: relaxing only those along the faces left the fine
+        # top cells falling 20 % too fast (docs/studies/mlcg_silo/NOTES.md).
+        if ex.boundary_velocity_gain > 0:
+            held = inside & boundary & (pf["mass"] > 0) & (cf["mass"] > 0)
+            du = ex.boundary_velocity_gain * (pf["velocity"] - cf["velocity"])
+            span = np.maximum(cf["velocity_max"] - cf["velocity_min"], 0.0)
+            du = np.clip(du, -span, span)  # limiter: at most the fine cell's velocity range
+            du[~held] = 0.0
+            c.child_acceleration = du / T
+            csim._level.set_coupling_acceleration(c.child_coupling, c.child_acceleration)
         # Coarse -> fine: stress boundary condition, a PI controller per interface face.
         kp = ex.stress_gain
         ki = ex.stress_integral if ex.stress_integral is not None else 1.0 / (4 * T)
@@ -531,6 +596,10 @@ class Hierarchy:
         ex = c.exchange
         if ex.velocity_gain > 0:
             self.sims[c.parent]._level.set_coupling_acceleration(c.parent_coupling, c.acceleration)
+        if ex.boundary_velocity_gain > 0:
+            self.sims[c.child]._level.set_coupling_acceleration(
+                c.child_coupling, c.child_acceleration
+            )
         if ex.stress_gain > 0 or ex.stress_integral is None or ex.stress_integral > 0:
             self.sims[c.child]._level.set_coupling_pressure(
                 c.child_coupling, c.pressure, c.max_inward
@@ -610,6 +679,9 @@ class Hierarchy:
                     "pressure": c.pressure.tolist(),
                     "max_inward": c.max_inward.tolist(),
                     "acceleration": c.acceleration.tolist(),
+                    "child_acceleration": c.child_acceleration.tolist(),
+                    "top_up": c.top_up.tolist(),
+                    "top_up_velocity": c.top_up_velocity.tolist(),
                     "inserters": list(c.interface.inserter_states()),
                     "flux": None
                     if c.flux is None
@@ -637,6 +709,10 @@ class Hierarchy:
             c.pressure = np.asarray(state["pressure"], float)
             c.max_inward = np.asarray(state["max_inward"], float)
             c.acceleration = np.asarray(state["acceleration"], float).reshape(-1, 3)
+            if "child_acceleration" in state:  # written since the velocity condition and top-up
+                c.child_acceleration = np.asarray(state["child_acceleration"], float).reshape(-1, 3)
+                c.top_up = np.asarray(state["top_up"], float)
+                c.top_up_velocity = np.asarray(state["top_up_velocity"], float).reshape(-1, 3)
             self._apply_controls(c)
             c.interface.load_inserter_states(state["inserters"])
             c.flux = (

@@ -103,6 +103,16 @@ def test_invalid_hierarchies_are_refused():
         gs.Hierarchy(base=ref, levels=[gs.Level(cg=2), gs.Level(cg=1, region=outside)])
     with pytest.raises(ValueError, match="Exchange.fade must be at most layer"):
         gs.Exchange(layer=1.0, fade=1.5)
+    with pytest.raises(
+        ValueError, match=r"Exchange.boundary_velocity_gain must be in \[0, 1\], got 1.5"
+    ):
+        gs.Exchange(boundary_velocity_gain=1.5)
+    with pytest.raises(ValueError, match="Exchange.top_up must be non-negative and finite, got -1"):
+        gs.Exchange(top_up=-1)
+    with pytest.raises(
+        ValueError, match=r"Exchange.top_up_min_fraction must be in \[0, 1\), got 1.2"
+    ):
+        gs.Exchange(top_up_min_fraction=1.2)
 
 
 def test_mass_entering_the_region_is_inserted_exactly():
@@ -116,7 +126,8 @@ def test_mass_entering_the_region_is_inserted_exactly():
     assert bal["inserted"] > 0.9 * bal["expected"]
     assert bal["pending"] < 0.1 * bal["expected"]
     assert bal["held"] == pytest.approx(
-        bal["inserted"] - bal["deleted_leaving"] - bal["removed_by_outlets"], rel=1e-9
+        bal["inserted"] + bal["topped_up"] - bal["deleted_leaving"] - bal["removed_by_outlets"],
+        rel=1e-9,
     )
     # The fine level holds about the coarse mass of its region (both fill the same bin).
     f = h.fields()
@@ -144,13 +155,22 @@ def test_three_levels_in_a_chain():
     assert h.level(2).num_particles > 0
 
 
-def test_hierarchy_checkpoint_continues_bit_identically(tmp_path):
-    a = two_level()
+# The defaults run the boundary velocity condition; the second set also tops up on every interval
+# (the dilute stream), so that the top-up state (budgets, velocities, counters) is restored too.
+@pytest.mark.parametrize(
+    "exchange",
+    [{}, {"boundary_velocity_gain": 0.5, "top_up_min_fraction": 0.0}],
+    ids=["defaults", "top-up-every-interval"],
+)
+def test_hierarchy_checkpoint_continues_bit_identically(tmp_path, exchange):
+    a = two_level(**exchange)
     a.run(until=0.09)
     path = tmp_path / "hierarchy.h5"
     a.checkpoint(path)
     a.run(intervals=15)
-    b = two_level()
+    if exchange:
+        assert a.mass_balance()[0]["topped_up"] > 0
+    b = two_level(**exchange)
     b.restart(path)
     b.run(intervals=15)
     for k in (0, 1):
@@ -160,3 +180,88 @@ def test_hierarchy_checkpoint_continues_bit_identically(tmp_path):
         assert np.array_equal(pa["position"], pb["position"])
         assert np.array_equal(pa["velocity"], pb["velocity"])
     assert a.mass_balance() == b.mass_balance()
+
+
+def test_boundary_cells_are_relaxed_towards_the_coarse_velocity():
+    """Exchange.boundary_velocity_gain: every component of the fine Favre velocity of a boundary
+    cell is pulled towards the coarse one, a = k (u_c - u_f) / T, limited by the fine cell's
+    velocity range; interior cells and cells empty on either level feel nothing."""
+    h = two_level(cell_size=0.006, boundary_velocity_gain=0.5, velocity_gain=0.0, stress_gain=0.0)
+    h.run(intervals=1)
+    c = h.couplings[0]
+    n = len(c.grid["inside"])
+    boundary = c.grid["boundary"] > 0
+    rng = np.random.default_rng(3)
+    fine = {k: np.array(v, copy=True) for k, v in c.child_fields.items()}
+    coarse = {k: np.array(v, copy=True) for k, v in c.parent_fields.items()}
+    fine["mass"][:] = coarse["mass"][:] = 1e-3
+    fine["mass"][0] = 0.0  # a boundary cell without fine particles
+    coarse["velocity"] = rng.normal(size=(n, 3))
+    fine["velocity"] = rng.normal(size=(n, 3))
+    fine["velocity_min"] = fine["velocity"] - 0.3
+    fine["velocity_max"] = fine["velocity"] + 0.3
+    c.parent_fields, c.child_fields = coarse, fine
+    h._control(c)
+    expected = np.clip(0.5 * (coarse["velocity"] - fine["velocity"]), -0.6, 0.6) / h.every
+    expected[~boundary] = 0.0
+    expected[0] = 0.0
+    assert boundary[0] and np.count_nonzero(~boundary) > 0
+    np.testing.assert_allclose(c.child_acceleration, expected, rtol=1e-12, atol=0)
+    assert np.any(np.abs(expected) == 0.6 / h.every)  # the limiter acted somewhere
+
+
+def test_top_up_feeds_a_dense_bed_only_and_is_booked_apart():
+    """Exchange.top_up: while the stream falls through the region's top face dilute, the flux
+    alone feeds the fine level (topping up a dilute stream would add its deficit again every
+    interval while the same grains cross the cell); once the bed above the face is dense, the
+    fine level adds particles up to the solid-fraction deficit, booked as topped_up, and the
+    mass it holds stays accounted for exactly."""
+    low = gs.Box(lo=(0.008, 0.008, 0.0), hi=(0.032, 0.032, 0.012))
+
+    def hierarchy(**exchange) -> gs.Hierarchy:
+        return gs.Hierarchy(
+            base=pouring_reference(rate=0.1),
+            levels=[gs.Level(cg=2), gs.Level(cg=1, region=low)],
+            exchange=gs.Exchange(
+                every=1e-3, cell_size=0.006, top_up=1.0, boundary_velocity_gain=0.0, **exchange
+            ),
+        )
+
+    dense_only, always = hierarchy(), hierarchy(top_up_min_fraction=0.0)
+    for h in (dense_only, always):
+        h.run(until=0.12)  # the stream has crossed the top face to the floor
+    (a,), (b,) = dense_only.mass_balance(), always.mass_balance()
+    assert a["expected"] > 0.005 and b["expected"] > 0.005
+    assert b["topped_up"] > 0.3 * b["expected"]
+    assert a["topped_up"] < 0.02 * a["expected"]
+    dense_only.run(until=0.45)  # the bed has grown over the region
+    g = dense_only.couplings[0].grid
+    top = g["face_cell"][g["face_normal"][:, 2] < -0.5].astype(int)
+    assert dense_only.fields()["parent"]["solid_fraction"][top].mean() > 0.5
+    (a,) = dense_only.mass_balance()
+    assert a["topped_up"] > 0.02 * a["expected"]
+    assert abs(a["unaccounted"]) <= 1e-12 * a["expected"]
+    assert a["held"] == pytest.approx(
+        a["inserted"] + a["topped_up"] - a["deleted_leaving"] - a["removed_by_outlets"], rel=1e-9
+    )
+
+
+def test_inserter_state_reads_the_format_before_the_top_up():
+    """Inserter states of checkpoints written before the top-up ("flux-v1", without its two
+    counters) still load; anything else is refused with a clear error."""
+    h = two_level(top_up_min_fraction=0.0)
+    h.run(until=0.09)
+    itf = h.couplings[0].interface
+    before = itf.inserter_status()
+    assert before["topped_up_mass"].sum() > 0
+    states = list(itf.inserter_states())
+    assert all(s.startswith("flux-v2 ") for s in states)
+    old = ["flux-v1 " + " ".join(s.split(" ")[3:]) for s in states]
+    itf.load_inserter_states(old)
+    after = itf.inserter_status()
+    assert np.array_equal(after["fed_mass"], before["fed_mass"])
+    assert np.array_equal(after["inserted_mass"], before["inserted_mass"])
+    assert np.array_equal(after["pending_mass"], before["pending_mass"])
+    assert np.all(after["topped_up_mass"] == 0)
+    with pytest.raises(ValueError, match="FluxInserter state"):
+        itf.load_inserter_states(["flux-v9 " + " ".join(s.split(" ")[3:]) for s in states])
