@@ -42,11 +42,9 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
                                 std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
   place_pending(pending_, shell_, 50, rng_, grid, walls, position, radius);
-  for (std::size_t k = before; k < radius.size(); ++k) {
-    inserted_mass_ += mass_of(radius[k]);
-    ++inserted_count_;
-  }
+  add_mass(inserted_mass_, radius, before);
   const std::size_t from_flux = radius.size() - before;
+  inserted_count_ += static_cast<std::int64_t>(from_flux);
   if (!(top_up_ > 0) || !pending_.empty()) {  // flux first: no top-up while it still waits
     top_up_ = 0;
     return from_flux;
@@ -63,11 +61,12 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
   top_up_ = 0;
   const std::size_t start = radius.size();
   place_pending(extra, shell_, 50, rng_, grid, walls, position, radius);
-  for (std::size_t k = start; k < radius.size(); ++k) {
-    topped_up_mass_ += mass_of(radius[k]);
-    ++topped_up_count_;
-  }
+  add_mass(topped_up_mass_, radius, start);
   return from_flux;
+}
+
+void FluxInserter::add_mass(Real& total, const std::vector<Real>& radius, std::size_t first) const {
+  for (std::size_t k = first; k < radius.size(); ++k) total += mass_of(radius[k]);
 }
 
 Real FluxInserter::pending_mass() const {
@@ -79,10 +78,9 @@ Real FluxInserter::pending_mass() const {
 std::string FluxInserter::save_state() const {
   std::ostringstream out;
   out.precision(std::numeric_limits<Real>::max_digits10);
-  out << "flux-v2 " << topped_up_mass_ << ' ' << topped_up_count_ << ' ' << owed_ << ' ' << next_
-      << ' ' << fed_mass_ << ' ' << inserted_mass_ << ' ' << inserted_count_ << ' ' << velocity_[0]
-      << ' ' << velocity_[1] << ' ' << velocity_[2] << ' ' << spin_[0] << ' ' << spin_[1] << ' '
-      << spin_[2];
+  out << "flux-v2 " << topped_up_mass_ << ' ' << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' '
+      << inserted_mass_ << ' ' << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1]
+      << ' ' << velocity_[2] << ' ' << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2];
   write_pending(out, pending_, rng_);
   return out.str();
 }
@@ -91,10 +89,10 @@ void FluxInserter::load_state(const std::string& state) {
   std::istringstream in(state);
   std::string tag;
   Real owed = 0, next = 0, fed = 0, inserted = 0, topped = 0;
-  std::int64_t count = 0, topped_count = 0;
+  std::int64_t count = 0;
   Vec3 v, w;
   in >> tag;
-  if (tag == "flux-v2") in >> topped >> topped_count;  // v1: written before the top-up
+  if (tag == "flux-v2") in >> topped;  // v1: written before the top-up
   in >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >> w[2];
   std::vector<Real> pending;
   Rng rng;
@@ -107,7 +105,6 @@ void FluxInserter::load_state(const std::string& state) {
   inserted_mass_ = inserted;
   inserted_count_ = count;
   topped_up_mass_ = topped;
-  topped_up_count_ = topped_count;
   top_up_ = 0;
   velocity_ = v;
   spin_ = w;

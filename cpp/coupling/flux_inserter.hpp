@@ -13,8 +13,8 @@
 // Top-up (Exchange.top_up): where the coarse level holds a dense bed above the face, that bed
 // sinks into any room the fine bed leaves below it, which the flux measured on the coarse level
 // does not see. A top-up budget lets the inserter place extra particles in the shell, with the
-// coarse cell's velocity, up to the budget or the first that finds no room; they are booked
-// apart (topped_up_mass) and never owed: what does not fit lapses with the budget.
+// coarse cell's velocity, up to the budget, by the flux's placement rule; they are booked apart
+// (topped_up_mass) and never owed: what does not fit lapses with the budget.
 #pragma once
 
 #include <cstdint>
@@ -60,11 +60,12 @@ class FluxInserter {
   Real inserted_mass() const { return inserted_mass_; }
   std::int64_t inserted_count() const { return inserted_count_; }
   Real topped_up_mass() const { return topped_up_mass_; }
-  std::int64_t topped_up_count() const { return topped_up_count_; }
   // Scheduled but not placed, plus the owed remainder: fed = inserted + pending, exactly up to
   // the rounding of the sums.
   Real pending_mass() const;
   Real mass_of(Real r) const { return density_ * (4.0 / 3.0) * M_PI * r * r * r; }
+  // Adds the masses of radius[first:] to `total`, one by one.
+  void add_mass(Real& total, const std::vector<Real>& radius, std::size_t first) const;
 
   std::string save_state() const;
   void load_state(const std::string& state);
@@ -85,7 +86,6 @@ class FluxInserter {
   Real top_up_ = 0;  // budget of the next place() (kg)
   Vec3 top_up_velocity_ = Vec3::Zero();
   Real topped_up_mass_ = 0;
-  std::int64_t topped_up_count_ = 0;
 };
 
 }  // namespace grainscale

@@ -231,6 +231,8 @@ class _Coupled:
         self.child_acceleration = np.zeros((len(grid["inside"]), 3))
         self.top_up = np.zeros(self.n_faces)
         self.top_up_velocity = np.zeros((self.n_faces, 3))
+        self.downward = np.zeros(self.n_faces, bool)
+        self.cell_volume = 0.0
         self.parent_coupling = -1
         self.child_coupling = -1
         self.outlet = -1
@@ -382,6 +384,9 @@ class Hierarchy:
                 float(ex.fade * d_fine),
             )
             c = _Coupled(parent, k, itf, ex)
+            # For the top-up: the faces gravity points into, and the cell volume.
+            c.downward = c.grid["face_normal"] @ np.asarray(base.gravity, float) > 0
+            c.cell_volume = float(np.prod(c.grid["edge"]))
             c.parent_coupling = int(
                 psim._level.add_coupling(itf, ex.layer * d_fine, ex.fade * d_fine)
             )
@@ -527,14 +532,11 @@ class Hierarchy:
         # with up to top_up x the difference (booked apart from the flux in the mass balance).
         if ex.top_up > 0:
             cells = c.grid["face_cell"].astype(int)
-            g = np.asarray(self.base.gravity, float)
-            down = c.grid["face_normal"] @ g > 0
-            volume = float(np.prod(c.grid["edge"]))
             phi_c = pf["solid_fraction"][cells]
             deficit = np.maximum(phi_c - cf["solid_fraction"][cells], 0.0)
+            fed = c.downward & (phi_c >= ex.top_up_min_fraction)
             rho = float(self.material.density)
-            fed = down & (phi_c >= ex.top_up_min_fraction)
-            c.top_up = np.where(fed, ex.top_up * deficit * rho * volume, 0.0)
+            c.top_up = np.where(fed, ex.top_up * deficit * rho * c.cell_volume, 0.0)
             c.top_up_velocity = pf["velocity"][cells]
         # Coarse -> fine, velocity condition: the boundary cells' velocity relaxed towards the
         # coarse one. Every component: relaxing only those along the faces left the fine

@@ -156,7 +156,7 @@ def test_three_levels_in_a_chain():
 
 
 # The defaults run the boundary velocity condition; the second set also tops up on every interval
-# (the dilute stream), so that the top-up state (budgets, velocities, counters) is restored too.
+# (the dilute stream), so that the top-up state (budgets, velocities, booked mass) is restored.
 @pytest.mark.parametrize(
     "exchange",
     [{}, {"boundary_velocity_gain": 0.5, "top_up_min_fraction": 0.0}],
@@ -247,8 +247,8 @@ def test_top_up_feeds_a_dense_bed_only_and_is_booked_apart():
 
 
 def test_inserter_state_reads_the_format_before_the_top_up():
-    """Inserter states of checkpoints written before the top-up ("flux-v1", without its two
-    counters) still load; anything else is refused with a clear error."""
+    """Inserter states of checkpoints written before the top-up ("flux-v1", without its booked
+    mass) still load; anything else is refused with a clear error."""
     h = two_level(top_up_min_fraction=0.0)
     h.run(until=0.09)
     itf = h.couplings[0].interface
@@ -256,7 +256,7 @@ def test_inserter_state_reads_the_format_before_the_top_up():
     assert before["topped_up_mass"].sum() > 0
     states = list(itf.inserter_states())
     assert all(s.startswith("flux-v2 ") for s in states)
-    old = ["flux-v1 " + " ".join(s.split(" ")[3:]) for s in states]
+    old = ["flux-v1 " + " ".join(s.split(" ")[2:]) for s in states]
     itf.load_inserter_states(old)
     after = itf.inserter_status()
     assert np.array_equal(after["fed_mass"], before["fed_mass"])
@@ -264,4 +264,4 @@ def test_inserter_state_reads_the_format_before_the_top_up():
     assert np.array_equal(after["pending_mass"], before["pending_mass"])
     assert np.all(after["topped_up_mass"] == 0)
     with pytest.raises(ValueError, match="FluxInserter state"):
-        itf.load_inserter_states(["flux-v9 " + " ".join(s.split(" ")[3:]) for s in states])
+        itf.load_inserter_states(["flux-v9 " + " ".join(s.split(" ")[2:]) for s in states])
