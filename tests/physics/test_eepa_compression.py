@@ -148,3 +148,31 @@ def test_job_scales_the_die() -> None:
     assert (c.die_diameter, c.fill_height, c.seed) == pytest.approx((0.02, 0.03, 2))
     assert c.gravity == pytest.approx(2 * CASE.gravity)
     assert job.group == "h=1 D x0.5" and job.label == "h=1 D x0.5 seed 2"
+
+
+def test_lubricated_die_is_smooth_at_every_scale() -> None:
+    # the die wall (its own material) has neither friction nor cohesion, before and after
+    # scaling; the platens keep the powder's law; a rough die has no pair entry
+    lubricated = eu.Case(lubricated_die=True)
+    for h in (1.0, 3.0):
+        params = eu.scaled_parameters(lubricated, h).params
+        die = params.walls[eu.DIE].material
+        assert die is not None and params.walls[eu.PLATEN].material is None
+        (key, pair), *rest = params.contact.pairs.items()
+        assert not rest and die in key
+        assert (pair.friction, pair.rolling_friction, pair.pull_off_force) == (0, 0, 0)
+        assert pair.adhesive_stiffness == 0
+        assert params.contact.pull_off_force == pytest.approx(CASE.pull_off_force * h**2)
+    rough = eu.reference_parameters(CASE)
+    assert not rough.contact.pairs and rough.walls[eu.DIE].material is None
+
+
+def test_powder_of_radius_follows_the_cohesion_rules() -> None:
+    # the rules of Case at 1 mm give its rounded defaults; at 0.5 mm, k_adh / 2 and f0 / 4
+    one = eu.powder_of_radius(1e-3)
+    assert one.adhesive_stiffness == pytest.approx(CASE.adhesive_stiffness, rel=2e-3)
+    assert one.pull_off_force == pytest.approx(CASE.pull_off_force, rel=1e-12)
+    half = eu.powder_of_radius(0.5e-3, seed=4)
+    assert half.seed == 4 and half.radius == 0.5e-3
+    assert half.adhesive_stiffness == pytest.approx(one.adhesive_stiffness / 2, rel=1e-12)
+    assert half.pull_off_force == pytest.approx(one.pull_off_force / 4, rel=1e-12)

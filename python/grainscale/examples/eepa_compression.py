@@ -12,7 +12,9 @@ geometric similarity the cg scheme cannot keep in a fixed die); and a negative c
 largest h with f0 not scaled. Each run (see :mod:`grainscale.examples.eepa_uniaxial`): a
 random packing compacted without gravity, friction or cohesion in a 40 mm die, confined
 compression to sigma_pre = 10 kPa and unloading, die removed, unconfined compression to
-failure.
+failure. Options: the base powder's radius (``--radius-mm``, default 1 mm, D/d = 20; the
+CASES.md base is 0.5 mm), a lubricated die (``--lubricated-die``: frictionless, non-adhesive
+wall), fewer seeds for the costly base runs (``--base-seeds``).
 
 Run it with ``python -m grainscale.examples.eepa_compression --output out/eepa`` (one process;
 every run is saved in ``out/eepa/runs`` as it finishes and reused, so the study can be resumed).
@@ -320,7 +322,13 @@ def report(
         f" nu = {case.poisson_ratio:g}, e = {case.restitution:g};",
         f"- EEPA n = 1, chi = 1, k1 = 2 E* R*, k2/k1 = {case.unloading_ratio:g},"
         f" k_adh = {case.adhesive_stiffness:g} N/m, f0 = {case.pull_off_force:g} N (h = 1),"
-        f" mu = {case.friction:g}, EPSD mu_r = {case.rolling_friction:g};",
+        f" mu = {case.friction:g}, EPSD mu_r = {case.rolling_friction:g}; platens with the"
+        " powder's law; die wall "
+        + (
+            "lubricated (frictionless, non-adhesive, no rolling resistance);"
+            if case.lubricated_die
+            else "with the powder's law (rough);"
+        ),
         f"- sigma_pre = {case.pre_stress / 1e3:g} kPa; platen speed"
         f" {case.platen_speed * 1e3:g} mm/s at every scale; time step = shortest contact"
         f" duration / {case.steps_per_contact:g};",
@@ -378,14 +386,22 @@ def report(
     lines += ["", "## Similarity numbers the cg scheme does not preserve", ""]
     for b in broken:
         lines.append(f"- {b['definition']}: x h^{b['exponent']:g}")
-    lines += ["", f"Wall-clock of the study: {wall_clock:.0f} s (one process).", ""]
+    lines += ["", f"Run time of the study: {wall_clock:.0f} s (sum over the runs).", ""]
     return "\n".join(lines)
 
 
-def default_jobs(scales: Sequence[float], seeds: Sequence[int], control: float | None) -> list[Job]:
-    """The study's runs: every scale and seed; the reference powder in dies scaled to the
-    die-to-particle ratio of every coarser scale; the negative control (f0 not scaled)."""
-    jobs = [Job(h, seed=s) for h in scales for s in seeds]
+def default_jobs(
+    scales: Sequence[float],
+    seeds: Sequence[int],
+    control: float | None,
+    base_seeds: Sequence[int] | None = None,
+) -> list[Job]:
+    """The study's runs: every scale and seed (the reference powder in the full die with
+    ``base_seeds`` if given: its runs cost the most and scatter the least); the reference powder
+    in dies scaled to the die-to-particle ratio of every coarser scale; the negative control (f0
+    not scaled)."""
+    base = seeds if base_seeds is None else base_seeds
+    jobs = [Job(h, seed=s) for h in scales for s in (base if h == 1 else seeds)]
     jobs += [Job(1.0, seed=s, geometry=1 / h) for h in scales if h != 1 for s in seeds]
     if control is not None:
         jobs += [Job(control, True, seed=s) for s in seeds]
@@ -449,19 +465,39 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--output", type=Path, default=Path("out/eepa_compression"))
     parser.add_argument("--scales", type=float, nargs="+", default=[1.0, 1.5, 2.0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    parser.add_argument(
+        "--base-seeds",
+        type=int,
+        nargs="+",
+        help="seeds of h = 1 in the full die (default: --seeds)",
+    )
     parser.add_argument("--control", type=float, default=2.0, help="h of the f0-unscaled run")
     parser.add_argument("--die-mm", type=float, default=40.0, help="die diameter (mm)")
     parser.add_argument("--fill-mm", type=float, default=60.0, help="loose fill height (mm)")
     parser.add_argument("--preparation", choices=eu.PREPARATIONS, default="compact")
+    parser.add_argument(
+        "--radius-mm",
+        type=float,
+        help="mean radius of the base powder (mm), cohesion by the rules of Case (default: Case())",
+    )
+    parser.add_argument(
+        "--lubricated-die", action="store_true", help="frictionless, non-adhesive die wall"
+    )
     args = parser.parse_args(argv)
     if 1.0 not in args.scales:
         parser.error(f"--scales must contain the reference 1, got {args.scales}")
-    case = eu.Case(
+    geometry = dict(
         die_diameter=args.die_mm * 1e-3,
         fill_height=args.fill_mm * 1e-3,
         preparation=args.preparation,
+        lubricated_die=args.lubricated_die,
     )
-    jobs = default_jobs(args.scales, args.seeds, args.control)
+    case = (
+        eu.Case(**geometry)
+        if args.radius_mm is None
+        else eu.powder_of_radius(args.radius_mm * 1e-3, **geometry)
+    )
+    jobs = default_jobs(args.scales, args.seeds, args.control, args.base_seeds)
     _, comparisons = run_study(case, jobs, args.output)
     for c in comparisons:
         print(

@@ -87,6 +87,10 @@ class Case:
             (below frictionless jamming, about 0.64, nothing resists the platen).
         hold_time: time the compacted sample is held at the preparation stress (s).
         rest_time: rest after the full law is switched on, and after the die is removed (s).
+        lubricated_die: the die wall is frictionless and non-adhesive (no pull-off force, no
+            adhesive branch, no rolling resistance), as a lubricated die in the laboratory; the
+            confined stage is then a uniaxial-strain test without a wall-friction share. False
+            (default): the die wall has the powder's law, like the platens.
     """
 
     die_diameter: float = 0.04
@@ -114,6 +118,7 @@ class Case:
     fast_fraction: float = 0.45
     hold_time: float = 0.1
     rest_time: float = 0.02
+    lubricated_die: bool = False
 
     def __post_init__(self) -> None:
         for name in (
@@ -158,6 +163,19 @@ class Case:
         return math.pi * self.die_diameter**2 / 4
 
 
+def powder_of_radius(radius: float, **changes: Any) -> Case:
+    """The study's powder made of spheres of mean radius ``radius`` (m) with its cohesion set by
+    the rules of :class:`Case`: k_adh = 2 E* R* of two mean spheres, f0 = -0.5 sigma_pre d^2 (the
+    defaults are these rules at 1 mm, rounded). ``changes``: further Case fields."""
+    case = Case(radius=radius, **changes)
+    e_star = case.youngs_modulus / (2 * (1 - case.poisson_ratio**2))
+    return dataclasses.replace(
+        case,
+        adhesive_stiffness=2 * e_star * radius / 2,
+        pull_off_force=-0.5 * case.pre_stress * (2 * radius) ** 2,
+    )
+
+
 def reference_parameters(case: Case) -> ParameterSet:
     """The h = 1 parameter set: die, platens, EEPA law, loose packing to settle."""
     powder = gs.Material(
@@ -184,6 +202,21 @@ def reference_parameters(case: Case) -> ParameterSet:
     mass = case.density * 4 / 3 * math.pi * r_min**3
     dt = math.pi * math.sqrt(mass / k2) / case.steps_per_contact
     size = gs.dist.Uniform(r_min, r_max) if case.spread > 0 else gs.dist.Monodisperse(case.radius)
+    die = gs.geometry.Cylinder((0, 0, 0), (0, 0, 1), r_die, length=top)
+    if case.lubricated_die:
+        # A wall with a material of its own gets its own pair entry; 1e4 x the powder's modulus
+        # keeps E* of a die contact within 1e-4 of a rigid wall's.
+        steel = gs.Material(
+            density=case.density,
+            youngs_modulus=1e4 * case.youngs_modulus,
+            poisson_ratio=case.poisson_ratio,
+            name="die",
+        )
+        die = dataclasses.replace(die, material=steel)
+        smooth = gs.contact.Pair(
+            friction=0.0, rolling_friction=0.0, pull_off_force=0.0, adhesive_stiffness=0.0
+        )
+        law = dataclasses.replace(law, pairs={(powder, steel): smooth})
     return ParameterSet(
         domain=gs.Box((-r_die - margin, -r_die - margin, -margin), (r_die + margin,) * 2 + (top,)),
         contact=law,
@@ -193,7 +226,7 @@ def reference_parameters(case: Case) -> ParameterSet:
         walls=(
             gs.geometry.Plane((0, 0, 0), (0, 0, 1)),
             gs.geometry.Plane((0, 0, top - margin / 2), (0, 0, -1)),
-            gs.geometry.Cylinder((0, 0, 0), (0, 0, 1), r_die, length=top),
+            die,
         ),
         size=size,
         insertions=(
