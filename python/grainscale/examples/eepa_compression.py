@@ -486,16 +486,16 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if 1.0 not in args.scales:
         parser.error(f"--scales must contain the reference 1, got {args.scales}")
-    geometry = dict(
+    settings = dict(
         die_diameter=args.die_mm * 1e-3,
         fill_height=args.fill_mm * 1e-3,
         preparation=args.preparation,
         lubricated_die=args.lubricated_die,
     )
     case = (
-        eu.Case(**geometry)
+        eu.Case(**settings)
         if args.radius_mm is None
-        else eu.powder_of_radius(args.radius_mm * 1e-3, **geometry)
+        else eu.powder_of_radius(args.radius_mm * 1e-3, **settings)
     )
     jobs = default_jobs(args.scales, args.seeds, args.control, args.base_seeds)
     _, comparisons = run_study(case, jobs, args.output)

@@ -168,10 +168,10 @@ def powder_of_radius(radius: float, **changes: Any) -> Case:
     the rules of :class:`Case`: k_adh = 2 E* R* of two mean spheres, f0 = -0.5 sigma_pre d^2 (the
     defaults are these rules at 1 mm, rounded). ``changes``: further Case fields."""
     case = Case(radius=radius, **changes)
-    e_star = case.youngs_modulus / (2 * (1 - case.poisson_ratio**2))
+    e_star = case.youngs_modulus / (2 * (1 - case.poisson_ratio**2))  # two spheres alike
     return dataclasses.replace(
         case,
-        adhesive_stiffness=2 * e_star * radius / 2,
+        adhesive_stiffness=e_star * radius,  # 2 E* R* with R* = radius / 2
         pull_off_force=-0.5 * case.pre_stress * (2 * radius) ** 2,
     )
 
@@ -206,17 +206,17 @@ def reference_parameters(case: Case) -> ParameterSet:
     if case.lubricated_die:
         # A wall with a material of its own gets its own pair entry; 1e4 x the powder's modulus
         # keeps E* of a die contact within 1e-4 of a rigid wall's.
-        steel = gs.Material(
+        die_material = gs.Material(
             density=case.density,
             youngs_modulus=1e4 * case.youngs_modulus,
             poisson_ratio=case.poisson_ratio,
             name="die",
         )
-        die = dataclasses.replace(die, material=steel)
+        die = dataclasses.replace(die, material=die_material)
         smooth = gs.contact.Pair(
             friction=0.0, rolling_friction=0.0, pull_off_force=0.0, adhesive_stiffness=0.0
         )
-        law = dataclasses.replace(law, pairs={(powder, steel): smooth})
+        law = dataclasses.replace(law, pairs={(powder, die_material): smooth})
     return ParameterSet(
         domain=gs.Box((-r_die - margin, -r_die - margin, -margin), (r_die + margin,) * 2 + (top,)),
         contact=law,
