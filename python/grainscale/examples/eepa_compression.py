@@ -157,6 +157,9 @@ def run_row(case: eu.Case, job: Job, run: eu.RunResult, m: ea.Metrics) -> dict[s
         "peaked": m.peaked,
         "inertial_number_pre": ea.inertial_number(rate, d, c.density, c.pre_stress),
         "inertial_number_strength": ea.inertial_number(rate, d, c.density, max(m.strength, 1e-9)),
+        "inertial_number_unloading": ea.inertial_number(
+            c.unloading_platen_speed / m.seating_height, d, c.density, c.pre_stress
+        ),
         "wall_clock": run.wall_clock,
         "broken": run.broken,
         "notes": run.notes,
@@ -175,6 +178,7 @@ SUMMED = (
     "strength_bin",
     "strength_strain",
     "inertial_number_pre",
+    "inertial_number_unloading",
     "wall_clock",
 )
 
@@ -330,7 +334,8 @@ def report(
             else "with the powder's law (rough);"
         ),
         f"- sigma_pre = {case.pre_stress / 1e3:g} kPa; platen speed"
-        f" {case.platen_speed * 1e3:g} mm/s at every scale; time step = shortest contact"
+        f" {case.platen_speed * 1e3:g} mm/s at every scale (unloading at"
+        f" {case.unloading_platen_speed * 1e3:g} mm/s); time step = shortest contact"
         f" duration / {case.steps_per_contact:g};",
         "- loading strain from the seating stress"
         f" ({ea.SEATING_FRACTION:g} sigma_pre), and (column 'from start') from the height at"
@@ -339,14 +344,15 @@ def report(
         f" over the first {ea.UNLOADING_FRACTION:.0%} of the unloading; sigma_c: maximum up to"
         " 15 % strain (ASTM D2166) of the area-corrected unconfined stress averaged over"
         f" {ea.STRENGTH_WINDOW:g} strain (column 'bin': over {ea.UNCONFINED_BIN:g} strain, as in"
-        " the first version of the study).",
+        " the first version of the study); 'I unloading': inertial number"
+        " (d / T) sqrt(rho / sigma_pre) of the unloading strain rate 1 / T.",
         "",
         "## Per group of seeds (mean +/- standard deviation over the seeds)",
         "",
         "| group | seeds | N | D/d | phi (whole) | phi core | seating strain | eps_pre "
-        "| E_unl (MPa) | sigma_c (kPa) | sigma_c bin (kPa) | eps at sigma_c | L1 seed scatter "
-        "| wall-clock/run (s) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| I unloading | E_unl (MPa) | sigma_c (kPa) | sigma_c bin (kPa) | eps at sigma_c "
+        "| L1 seed scatter | wall-clock/run (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for g, s in summary.items():
         lines.append(
@@ -355,6 +361,7 @@ def report(
             f"| {_pm(s['core_solid_fraction'], s['core_solid_fraction_std'], '.3f')} "
             f"| {_pm(s['seating_strain'], s['seating_strain_std'], '.4f')} "
             f"| {_pm(s['pre_strain'], s['pre_strain_std'], '.4f')} "
+            f"| {s['inertial_number_unloading']:.1e} "
             f"| {_pm(s['unloading_stiffness'], s['unloading_stiffness_std'], '.2f', 1e-6)} "
             f"| {_pm(s['strength'], s['strength_std'], '.2f', 1e-3)} "
             f"| {_pm(s['strength_bin'], s['strength_bin_std'], '.2f', 1e-3)} "
@@ -483,6 +490,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument(
         "--lubricated-die", action="store_true", help="frictionless, non-adhesive die wall"
     )
+    parser.add_argument(
+        "--unloading-speed-mm-s",
+        type=float,
+        help="platen speed of the unloading (mm/s; default: the loading speed, 10 mm/s)",
+    )
     args = parser.parse_args(argv)
     if 1.0 not in args.scales:
         parser.error(f"--scales must contain the reference 1, got {args.scales}")
@@ -491,6 +503,9 @@ def main(argv: Sequence[str] | None = None) -> None:
         fill_height=args.fill_mm * 1e-3,
         preparation=args.preparation,
         lubricated_die=args.lubricated_die,
+        unloading_speed=(
+            None if args.unloading_speed_mm_s is None else args.unloading_speed_mm_s * 1e-3
+        ),
     )
     case = (
         eu.Case(**settings)

@@ -73,6 +73,11 @@ class Case:
         pull_off_force: f0 at h = 1 (N, negative attracts).
         pre_stress: pre-consolidation stress sigma_pre (Pa).
         platen_speed: m/s, the same at every scale (cg keeps process time).
+        unloading_speed: platen speed of the unloading (m/s); None: ``platen_speed``. The
+            unloading stiffness is a secant over a strain of about 1e-3, so it is quasi-static
+            only when that strain takes many inertial times d sqrt(rho / sigma_pre) of the
+            particles; coarser particles need a slower unloading (the cg scheme multiplies the
+            inertial number by h, see the study report).
         steps_per_contact: time step = shortest contact duration / this (stiffest contact: the
             unloading slope k2 of the smallest sphere on a rigid wall).
         seed: packing seed.
@@ -108,6 +113,7 @@ class Case:
     pull_off_force: float = -0.02
     pre_stress: float = 10e3
     platen_speed: float = 0.01
+    unloading_speed: float | None = None
     steps_per_contact: float = 10.0
     seed: int = 1
     gravity: float = 9.81
@@ -139,6 +145,13 @@ class Case:
             v = float(getattr(self, name))
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"Case.{name} must be positive and finite, got {v!r}")
+        if self.unloading_speed is not None and not (
+            self.unloading_speed > 0 and math.isfinite(self.unloading_speed)
+        ):
+            raise ValueError(
+                "Case.unloading_speed must be positive and finite or None, got"
+                f" {self.unloading_speed!r}"
+            )
         if not 0 <= self.spread < 1:
             raise ValueError(f"Case.spread must be in [0, 1), got {self.spread!r}")
         if self.preparation not in PREPARATIONS:
@@ -156,6 +169,11 @@ class Case:
             )
         if self.pull_off_force > 0:
             raise ValueError(f"Case.pull_off_force must be <= 0 (N), got {self.pull_off_force!r}")
+
+    @property
+    def unloading_platen_speed(self) -> float:
+        """Platen speed of the unloading stage (m/s)."""
+        return self.platen_speed if self.unloading_speed is None else self.unloading_speed
 
     @property
     def area(self) -> float:
@@ -438,7 +456,14 @@ def run_test(
 
     loading, unloading, unconfined = Curve(), Curve(), Curve()
     _drive(sim, loading, area, -speed, record, lambda c: c.stress[-1] >= case.pre_stress)
-    _drive(sim, unloading, area, speed, record, lambda c: c.stress[-1] <= 0.0)
+    _drive(
+        sim,
+        unloading,
+        area,
+        case.unloading_platen_speed,
+        record,
+        lambda c: c.stress[-1] <= 0.0,
+    )
     # lifted by the domain height: its lower end clears the sample and everything above it
     lift = params.domain.hi[2] - params.domain.lo[2]
     _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + lift)
