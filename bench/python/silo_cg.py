@@ -32,16 +32,16 @@ from typing import Any
 
 from bench_common import write_results
 
-from grainscale.examples import silo_discharge as sd
+from grainscale.examples import silo_case, silo_run
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_OUTPUT = REPO / "bench" / "results" / "silo_cg.json"
 
 
-def run_once(case: sd.SiloCase, orifice: float, seed: int) -> dict[str, Any]:
+def run_once(case: silo_case.SiloCase, orifice: float, seed: int) -> dict[str, Any]:
     """One silo run of ``case``: its size, steps and wall-clock."""
     t0 = time.perf_counter()
-    r = sd.run_orifice(case, orifice, seed)
+    r = silo_run.run_orifice(case, orifice, seed)
     wall = time.perf_counter() - t0
     simulated = r.fill_time + r.discharge_time
     return {
@@ -105,7 +105,7 @@ def main() -> int:
     for k in range(args.repeats):
         order = hs[k % len(hs) :] + hs[: k % len(hs)]
         for h in order:
-            case = sd.SiloCase(cg=h)
+            case = silo_case.SiloCase(cg=h)
             row = run_once(case, orifice, args.seed)
             row["repeat"] = k
             rows.append(row)
@@ -115,7 +115,7 @@ def main() -> int:
                 flush=True,
             )
     summary = summarise(rows, hs)
-    print(f"\nsilo D0 = {args.orifice:g} mm ({sd.SiloCase().describe()}), medians:")
+    print(f"\nsilo D0 = {args.orifice:g} mm ({silo_case.SiloCase().describe()}), medians:")
     head = (
         f"{'h':>3} {'particles':>9} {'steps':>7} {'sim (s)':>7} {'wall (s)':>8} "
         f"{'wall/sim s':>10} {'p-steps/s':>9} {'speed-up':>8} {'h^4':>5} {'N*steps ratio':>13}"
@@ -131,7 +131,7 @@ def main() -> int:
     entry = {
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
         "orifice_m": orifice,
-        "case": dataclasses.asdict(sd.SiloCase()),
+        "case": dataclasses.asdict(silo_case.SiloCase()),
         "runs": rows,
         "summary": summary,
     }

@@ -54,7 +54,7 @@ from hopper_case import write_binary_stl, write_granular_data
 from settle_case import liggghts_preamble
 
 import grainscale as gs
-from grainscale.examples import silo_discharge as sd
+from grainscale.examples import silo_beverloo, silo_case, silo_run
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "silo_crosscheck.json"
 
@@ -73,12 +73,12 @@ class Bed:
     fill_seconds: float
 
 
-def settled_bed(case: sd.SiloCase, orifice: float, seed: int) -> Bed:
+def settled_bed(case: silo_case.SiloCase, orifice: float, seed: int) -> Bed:
     """Pour and settle the silo of ``case`` with grainscale, shutter closed."""
     t0 = time.perf_counter()
-    setup = sd.silo_setup(case, orifice, seed)
+    setup = silo_run.silo_setup(case, orifice, seed)
     sim = gs.scaling.build_simulation(setup.params, quiet=True)
-    notes = sd.pour_and_settle(sim, case, setup)
+    notes = silo_run.pour_and_settle(sim, case, setup)
     for note in notes:
         print(f"  note: {note}", flush=True)
     with sim.particles(writable=False) as p:
@@ -91,10 +91,12 @@ def sample_steps(bed: Bed, sample: float) -> int:
     return max(1, round(sample / float(bed.params.time_step)))
 
 
-def run_steps(bed: Bed, case: sd.SiloCase, window: tuple[float, float], sample: float) -> int:
+def run_steps(
+    bed: Bed, case: silo_case.SiloCase, window: tuple[float, float], sample: float
+) -> int:
     """Steps long enough to pass the window's upper end at 0.75 x Beverloo's rate (C = 0.58,
     k = 1.5, rho_b = 0.6 rho_p): the study's rates are 0.82-0.95 x that."""
-    w = float(sd.beverloo_rate(bed.orifice, case.diameter, 0.6 * case.density))
+    w = float(silo_beverloo.beverloo_rate(bed.orifice, case.diameter, 0.6 * case.density))
     seconds = 0.15 + (window[1] + 0.05) * bed.mass.sum() / (0.75 * w)
     n = sample_steps(bed, sample)
     return n * math.ceil(seconds / float(bed.params.time_step) / n)
@@ -104,7 +106,9 @@ def run_steps(bed: Bed, case: sd.SiloCase, window: tuple[float, float], sample: 
 # LIGGGHTS
 
 
-def write_liggghts_case(workdir: Path, bed: Bed, case: sd.SiloCase, steps: int, every: int) -> str:
+def write_liggghts_case(
+    workdir: Path, bed: Bed, case: silo_case.SiloCase, steps: int, every: int
+) -> str:
     """Data file, floor STL and input script in ``workdir``; returns the script's name."""
     params = bed.params
     floor = params.walls[1]
@@ -140,7 +144,7 @@ pair_style      gran {models}
 pair_coeff      * *
 timestep        {float(params.time_step)!r}
 
-fix gravi all gravity {sd.G!r} vector 0.0 0.0 -1.0
+fix gravi all gravity {silo_beverloo.G!r} vector 0.0 0.0 -1.0
 fix floor all mesh/surface file ../floor.stl type 1
 fix floorwall all wall/gran {models} mesh n_meshes 1 meshes floor
 fix cylinder all wall/gran {models} primitive type 1 zcylinder {silo_radius!r} 0.0 0.0
@@ -236,14 +240,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--window", type=float, nargs=2, default=[0.1, 0.3])
     parser.add_argument("--sample", type=float, default=0.005, help="s between samples")
     parser.add_argument("--output", type=Path, default=RESULTS, help="results JSON")
-    parser.add_argument("--friction", type=float, default=sd.SiloCase.friction)
-    parser.add_argument("--rolling-friction", type=float, default=sd.SiloCase.rolling_friction)
+    parser.add_argument("--friction", type=float, default=silo_case.SiloCase.friction)
+    parser.add_argument(
+        "--rolling-friction", type=float, default=silo_case.SiloCase.rolling_friction
+    )
     add_spring_rotation_option(parser, "project")
     args = parser.parse_args(argv)
     if not 0 <= args.window[0] < args.window[1] < 1:
         raise SystemExit(f"--window must be two fractions 0 <= a < b < 1, got {args.window}")
     exe = ensure_liggghts()
-    case = sd.SiloCase(
+    case = silo_case.SiloCase(
         height_ratio=args.height_ratio,
         constant_head=False,
         friction=args.friction,
@@ -276,7 +282,7 @@ def main(argv: list[str] | None = None) -> int:
             shutil.rmtree(workdir, ignore_errors=True)
         entry: dict[str, Any] = {"orifice_mm": mm, "particles": len(bed.position), "mass": m0}
         for code, t, m, sec in (("grainscale", t_gs, m_gs, s_gs), ("liggghts", t_lg, m_lg, s_lg)):
-            w, w1, w2, r2 = sd.measure_rate(t, m, m0, window)
+            w, w1, w2, r2 = silo_run.measure_rate(t, m, m0, window)
             entry[code] = {"W": w, "W_first_half": w1, "W_second_half": w2, "r_squared": r2}
             entry[code] |= {"seconds": sec, "discharged_at_end": float(m[-1] / m0)}
         ratio = entry["grainscale"]["W"] / entry["liggghts"]["W"]

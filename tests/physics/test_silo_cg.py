@@ -23,8 +23,7 @@ import numpy as np
 import pytest
 
 import grainscale as gs
-from grainscale.examples import silo_cg
-from grainscale.examples import silo_discharge as sd
+from grainscale.examples import silo_case, silo_cg, silo_run
 
 REFERENCE = silo_cg.load_reference(Path(__file__).parents[2] / silo_cg.DEFAULT_REFERENCE)
 H = 2.0
@@ -32,13 +31,13 @@ ORIFICE = 0.052  # m
 
 
 @pytest.fixture(scope="module")
-def run() -> sd.DischargeResult:
-    return sd.run_orifice(dataclasses.replace(REFERENCE.case, cg=H), ORIFICE, seed=1)
+def run() -> silo_run.DischargeResult:
+    return silo_run.run_orifice(dataclasses.replace(REFERENCE.case, cg=H), ORIFICE, seed=1)
 
 
 def test_parameters_come_from_the_cg_scaling() -> None:
-    fine = sd.silo_setup(REFERENCE.case, ORIFICE)
-    coarse = sd.silo_setup(dataclasses.replace(REFERENCE.case, cg=H), ORIFICE)
+    fine = silo_run.silo_setup(REFERENCE.case, ORIFICE)
+    coarse = silo_run.silo_setup(dataclasses.replace(REFERENCE.case, cg=H), ORIFICE)
     assert fine.scaled is None and fine.params is fine.reference
     assert coarse.scaled is not None
     assert coarse.params == gs.scaling.scale(coarse.reference, H, scheme="cg").params
@@ -58,8 +57,8 @@ def test_parameters_come_from_the_cg_scaling() -> None:
     assert names == ["froude", "size_ratio", "inertial_number", "time_ratio"]
 
 
-def test_cg_run_has_h3_fewer_particles_and_steady_flow(run: sd.DischargeResult) -> None:
-    fine = sd.silo_setup(REFERENCE.case, ORIFICE).params
+def test_cg_run_has_h3_fewer_particles_and_steady_flow(run: silo_run.DischargeResult) -> None:
+    fine = silo_run.silo_setup(REFERENCE.case, ORIFICE).params
     i = REFERENCE.index(ORIFICE)
     assert run.cg == H
     assert run.silo_diameter == REFERENCE.case.silo_for(ORIFICE)
@@ -74,7 +73,7 @@ def test_cg_run_has_h3_fewer_particles_and_steady_flow(run: sd.DischargeResult) 
     assert 0.55 < run.core_bulk_density / REFERENCE.case.density < 0.67
 
 
-def test_cg_deficit_follows_beverloo(run: sd.DischargeResult) -> None:
+def test_cg_deficit_follows_beverloo(run: silo_run.DischargeResult) -> None:
     i = REFERENCE.index(ORIFICE)
     ratio = run.rate / REFERENCE.rate_mean[i]
     x = ORIFICE / REFERENCE.case.diameter
@@ -99,7 +98,7 @@ def test_predicted_ratio_matches_the_cases_table(
     assert silo_cg.effective_k(d0_over_d, h, 1.5, ratio) == pytest.approx(1.5, rel=1e-12)
 
 
-def test_runs_of_another_case_are_refused(tmp_path: Path, run: sd.DischargeResult) -> None:
+def test_runs_of_another_case_are_refused(tmp_path: Path, run: silo_run.DischargeResult) -> None:
     other = dataclasses.replace(REFERENCE.case, friction=0.3, cg=H)
     silo_cg.save_run(tmp_path, other, run)
     with pytest.raises(ValueError, match=r"another SiloCase .*differs in friction"):
@@ -113,4 +112,4 @@ def test_runs_of_another_case_are_refused(tmp_path: Path, run: sd.DischargeResul
 
 def test_cg_below_one_is_refused() -> None:
     with pytest.raises(ValueError, match=r"SiloCase.cg must be >= 1, got 0.5"):
-        sd.SiloCase(cg=0.5)
+        silo_case.SiloCase(cg=0.5)

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from grainscale.examples import silo_beverloo, silo_case, silo_report, silo_run
 from grainscale.examples import silo_discharge as sd
 
 DEFAULT_REFERENCE = Path("docs/studies/silo_discharge/results.json")
@@ -58,7 +59,7 @@ class Reference:
     """The resolved study a CG study is compared with (from its results.json)."""
 
     path: Path
-    case: sd.SiloCase
+    case: silo_case.SiloCase
     orifices: list[float]  # m
     seeds: list[int]
     rate_mean: list[float]  # kg/s per orifice
@@ -94,7 +95,7 @@ def load_reference(path: str | Path) -> Reference:
     """The resolved study stored in ``path`` (results.json of silo_discharge)."""
     p = Path(path)
     data = json.loads(p.read_text())
-    case = sd.SiloCase(**data["case"])
+    case = silo_case.SiloCase(**data["case"])
     if case.cg != 1:
         raise ValueError(f"silo_cg.reference must be a resolved study (cg = 1), got cg = {case.cg}")
     fit = data.get("fit_exponent_2_5")
@@ -149,25 +150,27 @@ def run_name(h: float, orifice: float, seed: int) -> str:
     return f"h{h:g}_D{orifice * 1e3:g}_s{seed}"
 
 
-def save_run(directory: Path, case: sd.SiloCase, run: sd.DischargeResult) -> None:
+def save_run(directory: Path, case: silo_case.SiloCase, run: silo_run.DischargeResult) -> None:
     """runs/<name>.json (the run's SiloCase and summary) and runs/<name>.csv (its history)."""
     directory.mkdir(parents=True, exist_ok=True)
     name = run_name(run.cg, run.orifice, run.seed)
     data = {"case": dataclasses.asdict(case), "run": run.summary()}
-    (directory / f"{name}.json").write_text(json.dumps(sd.json_ready(data), indent=2) + "\n")
+    (directory / f"{name}.json").write_text(
+        json.dumps(silo_report.json_ready(data), indent=2) + "\n"
+    )
     sd.save_history(directory / f"{name}.csv", run)
 
 
-def load_runs(directory: Path, reference: Reference) -> list[sd.DischargeResult]:
+def load_runs(directory: Path, reference: Reference) -> list[silo_run.DischargeResult]:
     """Every run stored in ``directory``; ValueError for a run whose SiloCase differs from the
     reference's in anything but cg."""
     runs = []
     for path in sorted(directory.glob("*.json")):
         data = json.loads(path.read_text())
-        case = sd.SiloCase(**data["case"])
+        case = silo_case.SiloCase(**data["case"])
         differ = [
             f.name
-            for f in dataclasses.fields(sd.SiloCase)
+            for f in dataclasses.fields(silo_case.SiloCase)
             if f.name != "cg" and getattr(case, f.name) != getattr(reference.case, f.name)
         ]
         if differ:
@@ -221,7 +224,7 @@ class Comparison:
         return self.ratio - self.predicted
 
 
-def compare(reference: Reference, runs: Sequence[sd.DischargeResult]) -> list[Comparison]:
+def compare(reference: Reference, runs: Sequence[silo_run.DischargeResult]) -> list[Comparison]:
     """One Comparison per (h, D0) of the runs."""
     d = reference.case.diameter
     out = []
@@ -259,7 +262,7 @@ def compare(reference: Reference, runs: Sequence[sd.DischargeResult]) -> list[Co
                 ratio_spread=std / w_ref,
                 ratio_error=ratio * math.sqrt(rel),
                 predicted=predicted,
-                predicted_k15=predicted_ratio(x, h, sd.BEVERLOO_K),
+                predicted_k15=predicted_ratio(x, h, silo_beverloo.BEVERLOO_K),
                 similar=reference.similar_ratio(d0, h),
                 similar_extrapolated=d0 / h < min(reference.orifices) * (1 - 1e-9),
                 effective_k=effective_k(x, h, reference.k, ratio) if ratio > 0 else math.nan,
@@ -279,7 +282,7 @@ def compare(reference: Reference, runs: Sequence[sd.DischargeResult]) -> list[Co
 
 def fit_cg(
     reference: Reference, comparisons: Sequence[Comparison], h: float
-) -> sd.BeverlooFit | None:
+) -> silo_beverloo.BeverlooFit | None:
     """Beverloo (n = 2.5) fitted to the CG runs of ratio h with the parcel diameter h d: C and k
     of the coarse system, from the orifices where at most 1 run in 10 clogged (intermittent
     flow is not Beverloo's); None with fewer than 2 such orifices."""
@@ -290,7 +293,7 @@ def fit_cg(
     ]
     if len(mine) < 2:
         return None
-    return sd.fit_beverloo(
+    return silo_beverloo.fit_beverloo(
         [c.orifice for c in mine],
         [c.rate_mean for c in mine],
         h * reference.case.diameter,
@@ -301,7 +304,7 @@ def fit_cg(
 
 def broken_similarities(reference: Reference, h: float, orifice: float) -> list[dict[str, Any]]:
     """The similarity numbers scale(..., "cg") reports broken for the silo at ratio h."""
-    setup = sd.silo_setup(dataclasses.replace(reference.case, cg=h), orifice)
+    setup = silo_run.silo_setup(dataclasses.replace(reference.case, cg=h), orifice)
     assert setup.scaled is not None
     return [dataclasses.asdict(b) for b in setup.scaled.broken]
 
@@ -337,7 +340,7 @@ def run_study(
         f"{len(tasks)} runs on {jobs} process(es); output in {out}"
     )
     t0 = time.perf_counter()
-    done = sd.run_many(tasks, jobs, verbose)
+    done = silo_run.run_many(tasks, jobs, verbose)
     say(f"{len(done)} runs in {time.perf_counter() - t0:.0f} s")
     cases = {c.cg: c for c, *_ in tasks}
     for r in done:
@@ -370,7 +373,7 @@ def analyse(output: str | Path, reference: Reference, verbose: bool = True) -> d
         "broken_similarities": {f"{h:g}": b for h, b in broken.items()},
         "runs": [dict(r.summary(), name=run_name(r.cg, r.orifice, r.seed)) for r in runs],
     }
-    (out / "results.json").write_text(json.dumps(sd.json_ready(result), indent=2) + "\n")
+    (out / "results.json").write_text(json.dumps(silo_report.json_ready(result), indent=2) + "\n")
     _plot(out / "ratio.png", reference, comparisons)
     text = _report(reference, comparisons, fits, broken, runs, result["passed"])
     (out / "report.md").write_text(text)
@@ -416,10 +419,10 @@ def _plot(path: Path, reference: Reference, comparisons: Sequence[Comparison]) -
         )
         ax_r.plot(
             x,
-            [predicted_ratio(v, h, sd.BEVERLOO_K) for v in x],
+            [predicted_ratio(v, h, silo_beverloo.BEVERLOO_K) for v in x],
             color=color,
             linestyle=":",
-            label=f"Beverloo h = {h:g}, k = {sd.BEVERLOO_K}",
+            label=f"Beverloo h = {h:g}, k = {silo_beverloo.BEVERLOO_K}",
         )
         if reference.free_fit is not None:
             ax_r.plot(
@@ -484,7 +487,7 @@ def _plot(path: Path, reference: Reference, comparisons: Sequence[Comparison]) -
         grid = np.linspace(k * h * d + 1e-3, max(reference.orifices) * 1.1, 200)
         ax_w.plot(
             grid * 1e3,
-            sd.beverloo_rate(grid, h * d, rho, reference.c, k),
+            silo_beverloo.beverloo_rate(grid, h * d, rho, reference.c, k),
             color=color,
             linestyle="--",
             label=f"C ρ_b √g (D0 − k h d)^2.5, h = {h:g}",
@@ -509,7 +512,7 @@ def _plot(path: Path, reference: Reference, comparisons: Sequence[Comparison]) -
     grid = np.linspace(reference.k * d + 1e-3, d0s.max() * 1.1, 200)
     ax_w.plot(
         grid * 1e3,
-        sd.beverloo_rate(grid, d, rho, reference.c, reference.k),
+        silo_beverloo.beverloo_rate(grid, d, rho, reference.c, reference.k),
         color="k",
         label="resolved fit",
     )
@@ -527,9 +530,9 @@ def _plot(path: Path, reference: Reference, comparisons: Sequence[Comparison]) -
 def _report(
     reference: Reference,
     comparisons: Sequence[Comparison],
-    fits: dict[float, sd.BeverlooFit | None],
+    fits: dict[float, silo_beverloo.BeverlooFit | None],
     broken: dict[float, list[dict[str, Any]]],
-    runs: Sequence[sd.DischargeResult],
+    runs: Sequence[silo_run.DischargeResult],
     passed: bool,
 ) -> str:
     case, d, mm = reference.case, reference.case.diameter, 1e3
