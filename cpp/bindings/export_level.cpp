@@ -199,17 +199,19 @@ void export_level(py::module_& m) {
       .def(
           "set_wall_servo",
           [](Level& l, int i, bool enabled, Vec3A direction, Real target_force, Real gain,
-             Real max_speed) {
+             Real max_speed, Real integral_gain) {
             Servo s;
             s.enabled = enabled;
             s.direction = to_vec3(direction);
             s.target_force = target_force;
             s.gain = gain;
             s.max_speed = max_speed;
+            s.integral_gain = integral_gain;
             l.set_wall_servo(i, s);
           },
           py::arg("index"), py::arg("enabled"), py::arg("direction"), py::arg("target_force"),
-          py::arg("gain"), py::arg("max_speed"))
+          py::arg("gain"), py::arg("max_speed"), py::arg("integral_gain") = 0.0)
+      .def("wall_servo_integral", [](Level& l, int i) { return l.walls().at(i).servo.integral; })
       .def("wall_velocity", [](Level& l, int i) { return from_vec3(l.walls().at(i).velocity); })
       .def("wall_origin", [](Level& l, int i) { return from_vec3(l.walls().at(i).origin); })
       .def("wall_vertices",

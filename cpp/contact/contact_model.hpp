@@ -61,7 +61,7 @@ class ContactModel {
     pairs_.assign(static_cast<std::size_t>(stride_) * stride_, Pair{});
     for (int i = 0; i < stride_; ++i)
       for (int j = 0; j < stride_; ++j) {
-        if (i == materials.rigid_index() && j == materials.rigid_index()) continue;
+        if (materials.rigid(i) && materials.rigid(j)) continue;  // walls never touch walls
         const Interaction& in = interactions[i * stride_ + j];
         pairs_[i * stride_ + j] = {Normal::make_pair(materials.pair_moduli(i, j), in),
                                    -Damping::factor() * restitution_beta(in.restitution),

@@ -8,9 +8,17 @@ namespace grainscale {
 
 Real Wall::advance(Real dt, Real reach) {
   if (servo.enabled) {
-    const Real load = -force.dot(servo.direction);
-    const Real speed =
-        std::clamp(servo.gain * (servo.target_force - load), -servo.max_speed, servo.max_speed);
+    const Real error = servo.target_force + force.dot(servo.direction);
+    Real wanted = servo.gain * error;
+    if (servo.integral_gain > 0) {
+      const Real integral = servo.integral + error * dt;
+      // Conditional integration: a saturated wall keeps its integral unless the error unwinds
+      // it.
+      const Real with_it = wanted + servo.integral_gain * integral;
+      if (std::abs(with_it) <= servo.max_speed || error * with_it < 0) servo.integral = integral;
+      wanted += servo.integral_gain * servo.integral;
+    }
+    const Real speed = std::clamp(wanted, -servo.max_speed, servo.max_speed);
     velocity = speed * servo.direction;
   }
   const Real w = angular_velocity.norm();

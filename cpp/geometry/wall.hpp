@@ -7,8 +7,11 @@
 //   Mesh       triangles (TriangleMesh); two-sided; faces, edges and vertices contacted once
 // Motion: translation `velocity` plus rotation `angular_velocity` about `origin` (rigid; the
 // surface velocity at a contact is v + w x (c - origin)). A servo replaces the translation
-// velocity each step by gain * (target - load) along `direction`, clamped to max_speed, where
-// load = -force . direction is the force the particles push back with.
+// velocity each step by a PI law along `direction`,
+//   v = clamp(gain e + integral_gain I, +-max_speed),  e = target - load,  I = sum e dt,
+// where load = -force . direction is the force the particles push back with. I is integrated
+// only while that does not drive a saturated speed further (conditional integration, the usual
+// anti-windup), so the wall does not overshoot after a long approach at max_speed.
 #pragma once
 
 #include <memory>
@@ -32,6 +35,8 @@ struct Servo {
   Real target_force = 0;           // N
   Real gain = 0;                   // (m/s)/N
   Real max_speed = 0;              // m/s
+  Real integral_gain = 0;          // (m/s)/(N s); 0: proportional only
+  Real integral = 0;               // N s, the integrated force error (state)
 };
 
 struct Wall {

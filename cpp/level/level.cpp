@@ -176,6 +176,8 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
     if (material[k] < 0 || material[k] >= materials_.n_materials())
       throw_invalid("add_particles.material", "a material index known to the simulation",
                     material[k]);
+    if (!materials_.deformable(material[k]))
+      throw_invalid("add_particles.material", "deformable (finite youngs_modulus)", material[k]);
     if (velocity && !Vec3(velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]).allFinite())
       throw_invalid("add_particles.velocity", "finite (m/s)", k);
     if (angular_velocity &&
@@ -310,7 +312,13 @@ void Level::set_wall_servo(int index, const Servo& servo) {
       throw_invalid("Servo.max_speed", "positive and finite (m/s)", s.max_speed);
     if (!std::isfinite(s.target_force))
       throw_invalid("Servo.target_force", "finite (N)", s.target_force);
+    if (!(s.integral_gain >= 0) || !std::isfinite(s.integral_gain))
+      throw_invalid("Servo.integral_gain", "non-negative and finite ((m/s)/(N s))",
+                    s.integral_gain);
   }
+  // A new target or gain on a wall already under PI control keeps the integrated error.
+  const Servo& old = walls_[index].servo;
+  s.integral = s.enabled && old.enabled && s.integral_gain > 0 ? old.integral : 0;
   walls_[index].servo = s;
   any_servo_ = false;
   for (const Wall& w : walls_) any_servo_ = any_servo_ || w.servo.enabled;

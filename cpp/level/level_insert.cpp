@@ -48,6 +48,8 @@ Vec3 wrapped(const Domain& d, Vec3 x) {
 std::pair<GlobalId, Index> Level::pack(const PackSpec& spec) {
   if (spec.material < 0 || spec.material >= materials_.n_materials())
     throw_invalid("Pack.material", "a material known to the simulation", spec.material);
+  if (!materials_.deformable(spec.material))
+    throw_invalid("Pack.material", "deformable (finite youngs_modulus)", spec.material);
   if ((spec.count >= 0) == (spec.volume_fraction >= 0))
     throw_invalid("Pack", "given exactly one of count and volume_fraction", "both or neither");
   if (spec.volume_fraction >= 0 && !(spec.volume_fraction <= 1))
@@ -106,6 +108,8 @@ int Level::add_stream(const StreamSpec& spec) {
     throw_invalid("Simulation.insert(Stream)", "used in 3-D only (dimension=3)", "dimension=2");
   if (spec.material < 0 || spec.material >= materials_.n_materials())
     throw_invalid("Stream.material", "a material known to the simulation", spec.material);
+  if (!materials_.deformable(spec.material))
+    throw_invalid("Stream.material", "deformable (finite youngs_modulus)", spec.material);
   StreamInserter s(spec, materials_[spec.material].density);
   require_inside(s.slab(), domain_,
                  "Stream.face (with its insertion slab " + shortest(s.thickness()) +

@@ -187,8 +187,9 @@ LevelState Level::save_state() {
         wall.velocity,       wall.angular_velocity, wall.origin, wall.force, wall.torque,
         wall.servo.direction};
     put(s, key + "vectors", geometry, std::size(geometry));
-    s.reals[key + "servo"] = {wall.servo.enabled ? 1.0 : 0.0, wall.servo.target_force,
-                              wall.servo.gain, wall.servo.max_speed};
+    s.reals[key + "servo"] = {
+        wall.servo.enabled ? 1.0 : 0.0, wall.servo.target_force,  wall.servo.gain,
+        wall.servo.max_speed,           wall.servo.integral_gain, wall.servo.integral};
     if (wall.mesh) put(s, key + "vertices", wall.mesh->vertices.data(), wall.mesh->vertices.size());
   }
   save_insertion_state(s);
@@ -301,11 +302,15 @@ void Level::load_walls(const LevelState& s) {
     wall.torque = g[9];
     wall.servo.direction = g[10];
     const auto& servo = reals(s, key + "servo");
-    if (servo.size() != 4) throw std::runtime_error("checkpoint servo state is corrupt");
+    // 4 values: a checkpoint from before the PI servo (proportional only).
+    if (servo.size() != 4 && servo.size() != 6)
+      throw std::runtime_error("checkpoint servo state is corrupt");
     wall.servo.enabled = servo[0] != 0;
     wall.servo.target_force = servo[1];
     wall.servo.gain = servo[2];
     wall.servo.max_speed = servo[3];
+    wall.servo.integral_gain = servo.size() == 6 ? servo[4] : 0;
+    wall.servo.integral = servo.size() == 6 ? servo[5] : 0;
     if (wall.mesh) {
       // Own copy: the restarted mesh may not share vertices with the set-up's.
       wall.mesh = std::make_shared<TriangleMesh>(*wall.mesh);

@@ -9,8 +9,9 @@ namespace grainscale {
 int MaterialTable::add(const MaterialProperties& p) {
   if (!(p.density > 0) || !std::isfinite(p.density))
     throw_invalid("Material.density", "positive and finite (kg/m^3)", p.density);
-  if (!(p.youngs_modulus > 0) || !std::isfinite(p.youngs_modulus))
-    throw_invalid("Material.youngs_modulus", "positive and finite (Pa)", p.youngs_modulus);
+  if (!(p.youngs_modulus > 0))  // +inf: a rigid wall material (zero compliance below)
+    throw_invalid("Material.youngs_modulus", "positive (Pa; inf for a rigid wall material)",
+                  p.youngs_modulus);
   if (!(p.poisson_ratio >= 0 && p.poisson_ratio < 0.5))
     throw_invalid("Material.poisson_ratio", "in [0, 0.5)", p.poisson_ratio);
   materials_.push_back(p);

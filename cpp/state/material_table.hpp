@@ -1,8 +1,11 @@
 // MaterialTable: per-material elastic properties and the derived per-pair effective moduli.
 // Index n_materials() is reserved for the rigid wall pseudo-material (E -> infinity), so that
-// rigid walls use exactly the same pair formulas as everything else.
+// rigid walls use exactly the same pair formulas as everything else. A material with E = +inf
+// is a rigid wall material of its own (zero compliance, its own pair entries); particles
+// need a deformable one.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "core/types.hpp"
@@ -29,6 +32,11 @@ class MaterialTable {
   int n_materials() const { return static_cast<int>(materials_.size()); }
   int rigid_index() const { return n_materials(); }
   const MaterialProperties& operator[](int i) const { return materials_[i]; }
+  // The rigid pseudo-material or a rigid wall material (E = +inf).
+  bool rigid(int i) const {
+    return i == rigid_index() || !std::isfinite(materials_[i].youngs_modulus);
+  }
+  bool deformable(int i) const { return !rigid(i); }
   PairModuli pair_moduli(int i, int j) const;
 
  private:

@@ -14,7 +14,9 @@ Interaction properties per material pair — restitution, friction, rolling fric
 damping and the law's own parameters — are resolved with these mixing rules, first match wins:
 
 1. an explicit entry ``pairs={(material_a, material_b): Pair(...)}`` on the law (``None`` as a
-   material means the rigid wall; ``(a, b)`` and ``(b, a)`` are the same entry);
+   material means every wall without a material; a rigid wall that needs entries of its own
+   gets a rigid material, ``Material(youngs_modulus=math.inf)``; ``(a, b)`` and ``(b, a)`` are
+   the same entry);
 2. for restitution, friction, rolling_friction and rolling_damping, the values set on the two
    materials (``Material(friction=...)``): their arithmetic mean when both set one, the one set
    otherwise (a rigid wall has no material: the particle's value is used);

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import positive, vector3
+from ._validate import non_negative, positive, vector3
 from .materials import Material
 
 
@@ -263,8 +263,16 @@ class Servo:
     """Force- or stress-controlled wall motion (compression tests, presses).
 
     Each step the wall moves along ``direction`` (into the material) at
-    gain * (target - load), clamped to max_speed, where load is the force the particles push the
-    wall back with.
+
+        v = clamp(gain e + integral_gain I, -max_speed, max_speed),  e = target - load,
+
+    where load is the force the particles push the wall back with and I = sum of e dt, the
+    integrated error. A proportional servo (integral_gain = 0) lags by v / gain whenever the
+    wall has to keep moving (a sample compressed from another side, a creeping bed); the
+    integral term removes that lag. I is integrated only while that does not push a saturated
+    speed further (conditional integration, the usual anti-windup), and it is kept when the
+    servo of a wall under PI control is set again (a new target or gain), reset when it is
+    switched off. ``Simulation.wall_servo_integral`` reads it; checkpoints carry it.
 
     Args:
         gain: (m/s)/N.
@@ -272,6 +280,10 @@ class Servo:
         target_force: N; or
         target_stress: Pa, with ``area`` (m^2; default: the rectangle's area).
         direction: default: the wall's normal (Plane, Rectangle).
+        integral_gain: (m/s)/(N s), >= 0 (default 0: proportional only). For a bed of
+            stiffness K (N/m) under the wall, integral_gain <= gain^2 K / 4 keeps the linearised
+            loop from oscillating (critical damping at equality, where a step in the target
+            overshoots by exp(-2), 14 %; less with a smaller integral gain).
     """
 
     gain: float
@@ -280,10 +292,12 @@ class Servo:
     target_stress: float | None = None
     area: float | None = None
     direction: tuple[float, float, float] | None = None
+    integral_gain: float = 0.0
 
     def __post_init__(self) -> None:
         positive("Servo", "gain", self.gain, " ((m/s)/N)")
         positive("Servo", "max_speed", self.max_speed, " (m/s)")
+        non_negative("Servo", "integral_gain", self.integral_gain)
         if (self.target_force is None) == (self.target_stress is None):
             raise ValueError(
                 "Servo needs exactly one of target_force or target_stress, got "

@@ -2,9 +2,24 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from ._validate import in_range, non_negative, positive
+
+
+def _modulus(value: float) -> float:
+    """Young's modulus: positive, finite or +inf (a rigid wall material)."""
+    try:
+        e = float(value)
+    except (TypeError, ValueError):
+        e = math.nan
+    if not e > 0:  # also NaN
+        raise ValueError(
+            "Material.youngs_modulus must be positive (Pa; inf for a rigid wall material), "
+            f"got {value!r}"
+        )
+    return e
 
 
 @dataclass(frozen=True)
@@ -13,7 +28,10 @@ class Material:
 
     Args:
         density: kg/m^3.
-        youngs_modulus: Young's modulus E in Pa.
+        youngs_modulus: Young's modulus E in Pa; ``math.inf`` makes a rigid wall material: E*
+            and G* of a contact with it are the particle's alone, as for a wall without a
+            material, but the wall keeps its own name, interaction values and pair entries
+            (e.g. a frictionless die next to rough platens). Particles need a finite E.
         poisson_ratio: Poisson's ratio nu, in [0, 0.5).
         name: label used in output and messages.
         restitution, friction, rolling_friction, rolling_damping: optional per-material
@@ -37,9 +55,7 @@ class Material:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "density", positive("Material", "density", self.density))
-        object.__setattr__(
-            self, "youngs_modulus", positive("Material", "youngs_modulus", self.youngs_modulus)
-        )
+        object.__setattr__(self, "youngs_modulus", _modulus(self.youngs_modulus))
         object.__setattr__(
             self,
             "poisson_ratio",
@@ -50,6 +66,11 @@ class Material:
         for name in ("friction", "rolling_friction", "rolling_damping"):
             if getattr(self, name) is not None:
                 non_negative("Material", name, getattr(self, name))
+
+    @property
+    def rigid(self) -> bool:
+        """True for a rigid wall material (youngs_modulus = inf)."""
+        return math.isinf(self.youngs_modulus)
 
     @property
     def shear_modulus(self) -> float:

@@ -250,6 +250,16 @@ class Simulation:
         self._materials.append(material)
         return int(k)
 
+    def particle_material_index(self, material: Material, owner: str) -> int:
+        """``material_index`` for particles: a rigid wall material is refused (``owner`` names
+        the caller in the message)."""
+        if isinstance(material, Material) and material.rigid:
+            raise ValueError(
+                f"{owner}.material must be deformable (finite youngs_modulus), got the rigid "
+                f"wall material {material.name!r}"
+            )
+        return self.material_index(material)
+
     @property
     def materials(self) -> list[Material]:
         """Registered materials, by index."""
@@ -281,7 +291,7 @@ class Simulation:
                 f"Simulation.add_particles.radius must have shape () or ({n},), got {rad.shape}"
             )
         rad = np.ascontiguousarray(np.broadcast_to(rad, (n,)))
-        mat = np.full(n, self.material_index(material), dtype=np.int32)
+        mat = np.full(n, self.particle_material_index(material, "add_particles"), dtype=np.int32)
 
         def rows(a: Any, name: str) -> np.ndarray | None:
             if a is None:
@@ -374,8 +384,18 @@ class Simulation:
             return
         wall = self._walls[k]
         self._level.set_wall_servo(
-            k, True, servo.direction_for(wall), servo.force_for(wall), servo.gain, servo.max_speed
+            k,
+            True,
+            servo.direction_for(wall),
+            servo.force_for(wall),
+            servo.gain,
+            servo.max_speed,
+            servo.integral_gain,
         )
+
+    def wall_servo_integral(self, index: int) -> float:
+        """The integrated force error (N s) of wall ``index``'s PI servo (0 without one)."""
+        return float(self._level.wall_servo_integral(self._wall_index(index)))
 
     def wall_velocity(self, index: int) -> np.ndarray:
         """Current translation velocity (m/s) of wall ``index`` (servo walls change it)."""

@@ -15,6 +15,11 @@ def rayleigh_time(material: Material, radius: float) -> float:
         >>> f"{rayleigh_time(glass, 1e-3):.3e}"
         '1.212e-05'
     """
+    if material.rigid:
+        raise ValueError(
+            "rayleigh_time.material must be deformable (finite youngs_modulus), got the rigid "
+            f"wall material {material.name!r}"
+        )
     return _core.rayleigh_time(
         radius, material.density, material.youngs_modulus, material.poisson_ratio
     )

@@ -65,9 +65,10 @@ def test_servo_wall_sees_the_global_force(world):
         sim = settle(comm, 2000, seed=2)
         lid = gs.Plane(point=(0, 0, sim.domain.hi[2] - 1e-4), normal=(0, 0, -1), material=GLASS)
         area = float(sim.domain.length[0] * sim.domain.length[1])
-        sim.add_wall(
-            lid, servo=gs.geometry.Servo(gain=1.0, max_speed=0.3, target_stress=500, area=area)
+        servo = gs.geometry.Servo(
+            gain=1.0, max_speed=0.3, target_stress=500, area=area, integral_gain=100.0
         )
+        sim.add_wall(lid, servo=servo)
         return sim
 
     serial, decomposed = press(MPI.COMM_SELF), press(world)
@@ -81,6 +82,8 @@ def test_servo_wall_sees_the_global_force(world):
     assert pressed > 0  # and pressed on it
     assert abs(zb - za) <= 1e-10 * serial.domain.hi[2]
     assert np.allclose(decomposed.wall_force(6), serial.wall_force(6), rtol=1e-8)
+    ia, ib = serial.wall_servo_integral(6), decomposed.wall_servo_integral(6)
+    assert ia != 0 and abs(ib - ia) <= 1e-8 * abs(ia)  # the PI state follows the global load
 
 
 def test_vtk_pieces_and_parallel_index(world, shared_tmp):

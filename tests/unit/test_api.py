@@ -31,7 +31,7 @@ def small_sim(**kwargs) -> gs.Simulation:
         ),
         (
             lambda: gs.Material(density=1, youngs_modulus=float("nan"), poisson_ratio=0.3),
-            "Material.youngs_modulus must be positive and finite",
+            "Material.youngs_modulus must be positive (Pa; inf for a rigid wall material), got nan",
         ),
         (
             lambda: gs.contact.HertzMindlin(restitution=1.5),

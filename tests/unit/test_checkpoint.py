@@ -33,7 +33,8 @@ def build(law: object) -> gs.Simulation:
     sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 1, 0)))
     sim.add_wall(gs.Plane(point=(0, 0.02, 0), normal=(0, -1, 0), material=GLASS))
     lid = gs.Rectangle(corner=(0, 0, 0.03), edge1=(0.02, 0, 0), edge2=(0, 0.02, 0))
-    sim.add_wall(lid, servo=gs.geometry.Servo(target_stress=200.0, gain=0.05, max_speed=0.05))
+    servo = gs.geometry.Servo(target_stress=200.0, gain=0.05, max_speed=0.05, integral_gain=0.1)
+    sim.add_wall(lid, servo=servo)
     return sim
 
 
@@ -54,6 +55,7 @@ def snapshot(sim: gs.Simulation) -> dict[str, np.ndarray]:
         out[f"wall{k}"] = np.concatenate(
             [sim.wall_force(k), sim.wall_torque(k), sim.wall_position(k)]
         )
+    out["servo_integral"] = np.array([sim.wall_servo_integral(3)])  # the lid's PI state
     out["time"] = np.array([sim.time, sim.step])
     return out
 

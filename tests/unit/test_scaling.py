@@ -58,6 +58,7 @@ DIMENSIONS = {
     "damping_coefficient": (0, 1, -1, -1),
     "mass_rate": (0, 1, -1, -1),
     "servo_gain": (0, -1, 1, 1),
+    "servo_integral_gain": (0, -1, 0, 1),
     "restitution": (0, 0, 0, 0),
     "friction": (0, 0, 0, 0),
     "rolling_friction": (0, 0, 0, 0),
@@ -110,7 +111,7 @@ def test_2d_tables_drop_one_power_for_extensive_quantities(scheme: str) -> None:
         # cg/sakai/spa keep system quantities fixed (wall force, mass rate, area, servo gain)
         if factors(scheme, 3)[name] == 0 and name in ("wall_force", "mass_rate", "area"):
             continue
-        if name == "servo_gain" and t3[name] == 0:
+        if name in ("servo_gain", "servo_integral_gain") and t3[name] == 0:
             continue
         if name == "particle_count":  # h^-3 spheres, h^-2 discs per unit thickness
             assert t2[name] == t3[name] * 2 / 3
@@ -301,7 +302,7 @@ def test_exact_maps_walls_servos_and_particles() -> None:
         ),
         mesh,
     ]
-    servos = {1: Servo(gain=1e-3, max_speed=0.05, target_force=10.0)}
+    servos = {1: Servo(gain=1e-3, max_speed=0.05, target_force=10.0, integral_gain=0.5)}
     particles = Particles(
         np.array([[0.01, 0.02, 0.03]]),
         1e-3,
@@ -321,6 +322,7 @@ def test_exact_maps_walls_servos_and_particles() -> None:
     assert m.angular_velocity == (0, 0, 2.0) and m.origin == tuple(np.multiply(mesh.origin, h))
     servo = out.servos[1]
     assert servo.gain == 1e-3 / h**2 and servo.target_force == 40.0 and servo.max_speed == 0.05
+    assert servo.integral_gain == 0.5 / h**3  # (m/s)/(N s): velocity / (force x time)
     p = out.particles[0]
     np.testing.assert_array_equal(p.position, particles.position * h)
     np.testing.assert_array_equal(p.radius, [2e-3])

@@ -366,6 +366,10 @@ def test_wall_torque_of_resting_sphere_is_lever_arm_cross_weight(kind: str) -> N
             lambda: gs.geometry.Servo(target_force=1, gain=1e-3, max_speed=-1),
             "Servo.max_speed must be positive and finite",
         ),
+        (
+            lambda: gs.geometry.Servo(target_force=1, gain=1e-3, max_speed=1, integral_gain=-2),
+            "Servo.integral_gain must be non-negative and finite, got -2",
+        ),
     ],
 )
 def test_wall_parameter_validation(factory, message: str) -> None:

@@ -223,7 +223,9 @@ def reference_parameters(case: Case) -> ParameterSet:
     die = gs.geometry.Cylinder((0, 0, 0), (0, 0, 1), r_die, length=top)
     if case.lubricated_die:
         # A wall with a material of its own gets its own pair entry; 1e4 x the powder's modulus
-        # keeps E* of a die contact within 1e-4 of a rigid wall's.
+        # keeps E* of a die contact within 1e-4 of a rigid wall's. (A rigid material,
+        # youngs_modulus=math.inf, is exact; the study keeps 1e4 x E so that its committed runs
+        # reproduce.)
         die_material = gs.Material(
             density=case.density,
             youngs_modulus=1e4 * case.youngs_modulus,

@@ -23,7 +23,7 @@ multiplied in the scaled one (h = particle size ratio). Schemes:
 
 2-D tables are per unit thickness (discs): a quantity that grows with the thickness (mass,
 inertia, force, torque, stiffness, damping, energy, pull-off force, mass rate, area) loses one
-power of h against 3-D (servo gain, an inverse force, gains one); intensive quantities (stress,
+power of h against 3-D (the servo gains, inverse forces, gain one); intensive quantities (stress,
 moduli, density, surface energy) keep their 3-D factor. Zhang et al. 2021, Eq. 34-35: the mean
 contact force scales as h^2 in 3-D and h in 2-D.
 """
@@ -68,6 +68,7 @@ _TABLE: dict[str, tuple[float, ...]] = {
     "mass_rate": (2, 1, 0, 0, 0, 0, 0, 0),
     "particle_count": (0, 0, -3, -2, -3, -2, -3, -2),
     "servo_gain": (-2, -1, 0, 0, 0, 0, 0, 0),
+    "servo_integral_gain": (-3, -2, 0, 0, 0, 0, 0, 0),
     "characteristic_velocity": (0, 0, 0, 0, 0, 0, 0, 0),
     "restitution": (0, 0, 0, 0, 0, 0, 0, 0),
     "friction": (0, 0, 0, 0, 0, 0, 0, 0),

@@ -145,6 +145,7 @@ class _Mapper:
             s,
             {
                 "gain": _times(s.gain, f["servo_gain"]),
+                "integral_gain": _times(s.integral_gain, f["servo_integral_gain"]),
                 "max_speed": _times(s.max_speed, f["velocity"]),
                 "target_force": _times(s.target_force, f["wall_force"]),
                 "target_stress": _times(s.target_stress, f["stress"]),
