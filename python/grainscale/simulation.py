@@ -291,7 +291,9 @@ class Simulation:
                 f"Simulation.add_particles.radius must have shape () or ({n},), got {rad.shape}"
             )
         rad = np.ascontiguousarray(np.broadcast_to(rad, (n,)))
-        mat = np.full(n, self.particle_material_index(material, "add_particles"), dtype=np.int32)
+        mat = np.full(
+            n, self.particle_material_index(material, "Simulation.add_particles"), dtype=np.int32
+        )
 
         def rows(a: Any, name: str) -> np.ndarray | None:
             if a is None:

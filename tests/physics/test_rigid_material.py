@@ -4,6 +4,7 @@ a material, with the wall's own interaction values and pair entries."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -95,10 +96,8 @@ def test_rigid_materials_are_for_walls_only() -> None:
     with pytest.raises(ValueError, match=r"Material\.youngs_modulus must be positive"):
         gs.Material(density=1.0, youngs_modulus=-math.inf, poisson_ratio=0.3)
     sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)), time_step=1e-6)
-    message = "add_particles.material must be deformable (finite youngs_modulus), got the rigid"
-    with pytest.raises(
-        ValueError, match=message.replace(".", r"\.").replace("(", r"\(").replace(")", r"\)")
-    ):
+    message = "Simulation.add_particles.material must be deformable (finite youngs_modulus), got"
+    with pytest.raises(ValueError, match=re.escape(message)):
         sim.add_particles(position=[(0.005, 0.005, 0.005)], radius=R, material=STEEL)
     with pytest.raises(ValueError, match=r"Pack\.material must be deformable"):
         sim.insert(

@@ -188,9 +188,11 @@ def _servo_gain(case: BiaxialCase, h: float, restitution: float) -> float:
 class Confinement:
     """Servo walls at the confining stress x current wall length (x 1 m).
 
-    The core's servo is proportional: at a steady wall speed v it lags by v / gain, which at a
-    stable gain is tens of per cent. Python therefore adds an integral term between chunks: the
-    commanded force is corrected by the measured stress error, so the mean error goes to zero.
+    A proportional servo lags by v / gain at a steady wall speed v, which at a stable gain is
+    tens of per cent. This study adds an integral term between chunks: the commanded force is
+    corrected by the measured stress error, so the mean error goes to zero. (The core now has a
+    PI servo, ``Servo.integral_gain``; the study keeps its chunked integral so that its
+    committed results reproduce.)
     """
 
     def __init__(self, case: BiaxialCase, h: float, restitution: float, walls: range) -> None:
