@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import grainscale as gs
-from grainscale.examples import hopper_demo
+from grainscale.examples import hopper_demo, hopper_geometry
 
 
 @pytest.fixture(scope="module")
@@ -84,16 +84,16 @@ def test_hopper_demo_particles_flow_out(quick_hopper: tuple[Path, str]) -> None:
 
 
 def test_packaged_stl_is_the_generated_hopper(tmp_path: Path) -> None:
-    packaged = gs.geometry.Mesh.from_stl(hopper_demo.PACKAGED_STL)
-    written = gs.geometry.Mesh.from_stl(hopper_demo.write_hopper_stl(tmp_path / "h.stl"))
+    packaged = gs.geometry.Mesh.from_stl(hopper_geometry.PACKAGED_STL)
+    written = gs.geometry.Mesh.from_stl(hopper_geometry.write_hopper_stl(tmp_path / "h.stl"))
     assert np.array_equal(packaged.vertices, written.vertices)
     assert np.array_equal(packaged.triangles, written.triangles)
-    assert hopper_demo.PACKAGED_STL.stat().st_size < 200_000
+    assert hopper_geometry.PACKAGED_STL.stat().st_size < 200_000
 
 
 def test_hopper_geometry_read_off_the_mesh() -> None:
-    shape = hopper_demo.HopperShape()
-    geo = hopper_demo.HopperGeometry.of(hopper_demo.hopper_mesh(shape))
+    shape = hopper_geometry.HopperShape()
+    geo = hopper_geometry.HopperGeometry.of(hopper_geometry.hopper_mesh(shape))
     assert geo.outlet_z == pytest.approx(0.0, abs=1e-12)
     assert geo.outlet_radius == pytest.approx(0.5 * shape.outlet_diameter)
     assert geo.top_radius == pytest.approx(0.5 * shape.bin_diameter)
