@@ -198,3 +198,30 @@ def test_slow_unloading_gives_the_quasi_static_stiffness() -> None:
     fast, slow, slower = stiffness
     assert abs(slower / slow - 1) < 0.03, stiffness
     assert fast < 0.9 * slow, stiffness
+
+
+def test_cache_refuses_a_run_made_with_other_settings(tmp_path) -> None:
+    """A study resumed in the same output directory with another setting (here the unloading
+    speed) must run again, not reuse the cached run; the same settings reuse it."""
+    import json
+
+    job = ec.Job(2.0)
+    curve = eu.Curve(height=[0.02, 0.019], stress=[0.0, 1.0])
+    run = eu.RunResult(
+        h=2.0, control=False, particles=10, time_step=1e-6, mean_radius=1e-3,
+        solid_volume=1e-9, settled_height=0.02, core_solid_fraction=0.6, loading=curve,
+        unloading=curve, unconfined=curve, unconfined_start=0.0, broken=[], wall_clock=1.0,
+    )  # fmt: skip
+    path = tmp_path / (job.label.replace(" ", "_") + ".json")
+    settings = ec.run_settings(CASE, job, 0.15)
+    path.write_text(json.dumps(dict(dataclasses.asdict(run), settings=settings)))
+    (cached,) = ec.run_cached(CASE, [job], tmp_path, 0.15)
+    assert cached == run
+    slower = dataclasses.replace(CASE, unloading_speed=1e-3)
+    with pytest.raises(ValueError, match=r"other settings \(unloading_speed\)"):
+        ec.run_cached(slower, [job], tmp_path, 0.15)
+    with pytest.raises(ValueError, match=r"other settings \(max_unconfined_strain\)"):
+        ec.run_cached(CASE, [job], tmp_path, 0.05)
+    path.write_text(json.dumps(dataclasses.asdict(run)))  # an older file, no settings
+    with pytest.raises(ValueError, match="no settings stored"):
+        ec.run_cached(CASE, [job], tmp_path, 0.15)

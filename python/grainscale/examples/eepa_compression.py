@@ -90,8 +90,36 @@ def _run(case: eu.Case, job: Job, max_unconfined_strain: float) -> eu.RunResult:
     return eu.run_test(job.case(case), job.h, job.control, max_unconfined_strain)
 
 
-def _load(path: Path) -> eu.RunResult:
+def run_settings(case: eu.Case, job: Job, max_unconfined_strain: float) -> dict[str, Any]:
+    """What a run depends on, as stored with it in the cache (JSON-normalised)."""
+    settings = {
+        "case": dataclasses.asdict(job.case(case)),
+        "h": job.h,
+        "control": job.control,
+        "max_unconfined_strain": max_unconfined_strain,
+    }
+    return json.loads(json.dumps(settings))
+
+
+def _flat(settings: dict[str, Any]) -> dict[str, Any]:
+    return {**settings["case"], **{k: v for k, v in settings.items() if k != "case"}}
+
+
+def _load(path: Path, settings: dict[str, Any]) -> eu.RunResult:
+    """A cached run, refused unless it was made with ``settings``."""
     d = json.loads(path.read_text())
+    stored = d.pop("settings", None)
+    if stored != settings:
+        changed = "no settings stored (an older version wrote it)"
+        if stored is not None:
+            old, new = _flat(stored), _flat(settings)
+            changed = ", ".join(
+                sorted(k for k in old.keys() | new.keys() if old.get(k) != new.get(k))
+            )
+        raise ValueError(
+            f"cached run {path} was made with other settings ({changed}); use another output "
+            "directory or delete the file to run it again"
+        )
     for stage in ("loading", "unloading", "unconfined"):
         d[stage] = eu.Curve(**d[stage])
     return eu.RunResult(**d)
@@ -101,18 +129,19 @@ def run_cached(
     case: eu.Case, jobs: Sequence[Job], cache: Path | None, max_unconfined_strain: float = 0.15
 ) -> list[eu.RunResult]:
     """Run the jobs one after another in this process; with a ``cache`` directory each run is
-    saved there as it finishes and read from there if already done (a long study can be stopped
-    and resumed)."""
+    saved there, with its settings, as it finishes and read from there if already done (a long
+    study can be stopped and resumed); a cached run made with other settings is refused."""
     out = []
     for job in jobs:
         path = None if cache is None else cache / (job.label.replace(" ", "_") + ".json")
+        settings = run_settings(case, job, max_unconfined_strain)
         if path is not None and path.exists():
-            out.append(_load(path))
+            out.append(_load(path, settings))
             continue
         run = _run(case, job, max_unconfined_strain)
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(dataclasses.asdict(run)))
+            path.write_text(json.dumps(dict(dataclasses.asdict(run), settings=settings)))
             print(f"{job.label}: {run.wall_clock:.0f} s", flush=True)
         out.append(run)
     return out
