@@ -43,6 +43,44 @@ std::vector<Real> reals(const py::array_t<Real, py::array::c_style | py::array::
   return std::vector<Real>(a.data(), a.data() + n);
 }
 
+using Array = py::array_t<Real, py::array::c_style | py::array::forcecast>;
+
+py::dict flux_dict(const std::vector<FaceFlux>& f) {
+  std::vector<Real> mass(f.size()), count(f.size()), inertia(f.size());
+  std::vector<Vec3> momentum(f.size()), spin(f.size());
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    mass[k] = f[k].mass;
+    count[k] = f[k].count;
+    inertia[k] = f[k].inertia;
+    momentum[k] = f[k].momentum;
+    spin[k] = f[k].spin;
+  }
+  py::dict d;
+  d["mass"] = vector_of(mass);
+  d["count"] = vector_of(count);
+  d["momentum"] = rows3(momentum);
+  d["spin"] = rows3(spin);
+  d["inertia"] = vector_of(inertia);
+  return d;
+}
+
+std::vector<FaceFlux> face_fluxes(const py::dict& d, std::size_t n) {
+  const auto mass = reals(Array::ensure(d["mass"]), n, "flux mass");
+  const auto count = reals(Array::ensure(d["count"]), n, "flux count");
+  const auto momentum = vec3_rows(Array::ensure(d["momentum"]), n, "flux momentum");
+  const auto spin = vec3_rows(Array::ensure(d["spin"]), n, "flux spin");
+  const auto inertia = reals(Array::ensure(d["inertia"]), n, "flux inertia");
+  std::vector<FaceFlux> f(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    f[k].mass = mass[k];
+    f[k].count = count[k];
+    f[k].momentum = momentum[k];
+    f[k].spin = spin[k];
+    f[k].inertia = inertia[k];
+  }
+  return f;
+}
+
 py::dict fields_dict(const CellFields& f) {
   py::dict d;
   d["samples"] = f.samples;
@@ -98,7 +136,7 @@ void export_coupling(py::module_& m) {
   py::class_<Interface>(m, "Interface")
       .def(py::init([](const Region& region, Real cell_size, Level& parent,
                        const SizeDistribution& fine_radius, Real fine_density, int fine_material,
-                       Real size_ratio, std::uint64_t seed, Real layer, Real fade) {
+                       Real size_ratio, Real deadband, std::uint64_t seed) {
              InterfaceSpec s;
              s.region = region;
              s.cell_size = cell_size;
@@ -106,14 +144,13 @@ void export_coupling(py::module_& m) {
              s.fine_density = fine_density;
              s.fine_material = fine_material;
              s.size_ratio = size_ratio;
+             s.deadband = deadband;
              s.seed = seed;
-             s.layer = layer;
-             s.fade = fade;
              return Interface(s, parent.domain(), parent.dimension());
            }),
            py::arg("region"), py::arg("cell_size"), py::arg("parent"), py::arg("fine_radius"),
            py::arg("fine_density"), py::arg("fine_material"), py::arg("size_ratio"),
-           py::arg("seed"), py::arg("layer"), py::arg("fade"))
+           py::arg("deadband"), py::arg("seed"))
       .def("grid",
            [](const Interface& it) {
              const ExchangeGrid& g = it.grid();
@@ -152,76 +189,87 @@ void export_coupling(py::module_& m) {
            })
       .def("start_flux", &Interface::start_flux, py::arg("parent"), py::arg("margin"),
            py::call_guard<py::gil_scoped_release>())
-      .def("finish_flux",
-           [](Interface& it, Level& parent) {
-             std::vector<FaceFlux> f;
-             {
-               py::gil_scoped_release release;
-               f = it.finish_flux(parent);
-             }
-             std::vector<Real> mass(f.size()), count(f.size()), inertia(f.size());
-             std::vector<Vec3> momentum(f.size()), spin(f.size());
-             for (std::size_t k = 0; k < f.size(); ++k) {
-               mass[k] = f[k].mass;
-               count[k] = f[k].count;
-               inertia[k] = f[k].inertia;
-               momentum[k] = f[k].momentum;
-               spin[k] = f[k].spin;
-             }
-             py::dict d;
-             d["mass"] = vector_of(mass);
-             d["count"] = vector_of(count);
-             d["momentum"] = rows3(momentum);
-             d["spin"] = rows3(spin);
-             d["inertia"] = vector_of(inertia);
-             return d;
-           })
-      .def("feed",
-           [](Interface& it, const py::dict& flux) {
-             const std::size_t n = it.inserters().size();
-             using A = py::array_t<Real, py::array::c_style | py::array::forcecast>;
-             const auto mass = reals(A::ensure(flux["mass"]), n, "flux mass");
-             const auto momentum = vec3_rows(A::ensure(flux["momentum"]), n, "flux momentum");
-             const auto spin = vec3_rows(A::ensure(flux["spin"]), n, "flux spin");
-             const auto inertia = reals(A::ensure(flux["inertia"]), n, "flux inertia");
-             std::vector<FaceFlux> f(n);
-             for (std::size_t k = 0; k < n; ++k) {
-               f[k].mass = mass[k];
-               f[k].momentum = momentum[k];
-               f[k].spin = spin[k];
-               f[k].inertia = inertia[k];
-             }
-             it.feed(f);
-           })
       .def(
-          "allow_top_up",
-          [](Interface& it, py::array_t<Real, py::array::c_style | py::array::forcecast> mass,
-             py::array_t<Real, py::array::c_style | py::array::forcecast> velocity) {
-            auto& ins = it.inserters();
-            const auto m = reals(mass, ins.size(), "top-up mass");
-            const auto v = vec3_rows(velocity, ins.size(), "top-up velocity");
-            for (std::size_t k = 0; k < ins.size(); ++k) ins[k].allow_top_up(m[k], v[k]);
+          "finish_flux",
+          [](Interface& it, Level& parent) {
+            IntervalFlux f;
+            {
+              py::gil_scoped_release release;
+              f = it.finish_flux(parent);
+            }
+            py::dict d;
+            d["inward"] = flux_dict(f.inward);
+            d["outward"] = flux_dict(f.outward);
+            d["vanished_mass"] = f.vanished_mass;
+            d["vanished_count"] = f.vanished_count;
+            d["vanished_lost_mass"] = f.vanished_lost_mass;
+            d["inside_mass"] = f.inside_mass;
+            return d;
           },
-          py::arg("mass"), py::arg("velocity"))
+          py::arg("parent"))
+      .def(
+          "book",
+          [](Interface& it, const py::dict& flux, const Array& beyond) {
+            const std::size_t n = it.inserters().size();
+            IntervalFlux f;
+            f.inward = face_fluxes(flux["inward"].cast<py::dict>(), n);
+            f.outward = face_fluxes(flux["outward"].cast<py::dict>(), n);
+            it.book(f, vec3_rows(beyond, n, "beyond velocity"));
+          },
+          py::arg("flux"), py::arg("beyond"))
+      .def(
+          "credit",
+          [](Interface& it, const Array& left) {
+            it.credit(reals(left, it.inserters().size(), "left mass"));
+          },
+          py::arg("left"))
+      .def("extract", &Interface::extract, py::arg("child"),
+           py::call_guard<py::gil_scoped_release>())
+      .def(
+          "remove_shadow",
+          [](Interface& it, Level& parent, const Array& excess, std::array<Real, 3> near,
+             Real budget) {
+            std::vector<Real> e = reals(excess, it.grid().grid().n_cells(), "excess");
+            py::gil_scoped_release release;
+            return it.remove_shadow(parent, std::move(e), Vec3(near[0], near[1], near[2]), budget);
+          },
+          py::arg("parent"), py::arg("excess"), py::arg("near"), py::arg("budget"))
+      .def(
+          "allow_advance",
+          [](Interface& it, const Array& mass) {
+            auto& ins = it.inserters();
+            const auto m = reals(mass, ins.size(), "advance mass");
+            for (std::size_t k = 0; k < ins.size(); ++k) ins[k].allow_advance(m[k]);
+          },
+          py::arg("mass"))
       .def("insert", &Interface::insert, py::arg("child"), py::call_guard<py::gil_scoped_release>())
       .def("inserter_status",
            [](const Interface& it) {
              const auto& ins = it.inserters();
-             std::vector<Real> fed(ins.size()), inserted(ins.size()), pending(ins.size()),
-                 count(ins.size()), topped(ins.size());
-             for (std::size_t k = 0; k < ins.size(); ++k) {
+             const std::size_t n = ins.size();
+             std::vector<Real> fed(n), credited(n), debited(n), inserted(n), extracted(n),
+                 pending(n), count(n), advanced(n), outstanding(n);
+             for (std::size_t k = 0; k < n; ++k) {
                fed[k] = ins[k].fed_mass();
+               credited[k] = ins[k].credited_mass();
+               debited[k] = ins[k].debited_mass();
                inserted[k] = ins[k].inserted_mass();
+               extracted[k] = ins[k].extracted_mass();
                pending[k] = ins[k].pending_mass();
                count[k] = static_cast<Real>(ins[k].inserted_count());
-               topped[k] = ins[k].topped_up_mass();
+               advanced[k] = ins[k].advanced_mass();
+               outstanding[k] = ins[k].outstanding_advance();
              }
              py::dict d;
              d["fed_mass"] = vector_of(fed);
+             d["credited_mass"] = vector_of(credited);
+             d["debited_mass"] = vector_of(debited);
              d["inserted_mass"] = vector_of(inserted);
+             d["extracted_mass"] = vector_of(extracted);
              d["pending_mass"] = vector_of(pending);
              d["inserted_count"] = vector_of(count);
-             d["topped_up_mass"] = vector_of(topped);
+             d["advanced_mass"] = vector_of(advanced);
+             d["outstanding_advance"] = vector_of(outstanding);
              return d;
            })
       .def("inserter_states",
@@ -265,6 +313,16 @@ void export_coupling(py::module_& m) {
         c.acceleration = a.size() == 0 ? std::vector<Vec3>() : vec3_rows(a, n, "acceleration");
       },
       py::arg("index"), py::arg("acceleration"));
+  level.def("clear_lost_log", &Level::clear_lost_log);
+  level.def(
+      "set_coupling_velocity_bounds",
+      [](Level& l, int k, const Array& lo, const Array& hi) {
+        CouplingForces& c = l.coupling(k);
+        const std::size_t n = c.grid().grid().n_cells();
+        c.velocity_min = lo.size() == 0 ? std::vector<Vec3>() : vec3_rows(lo, n, "velocity_min");
+        c.velocity_max = lo.size() == 0 ? std::vector<Vec3>() : vec3_rows(hi, n, "velocity_max");
+      },
+      py::arg("index"), py::arg("velocity_min"), py::arg("velocity_max"));
   level.def(
       "set_coupling_pressure",
       [](Level& l, int k, const py::array_t<Real, py::array::c_style | py::array::forcecast>& p,
@@ -288,11 +346,13 @@ void export_coupling(py::module_& m) {
       py::arg("index"));
   level.def(
       "add_region_outlet",
-      [](Level& l, const Interface& it, int every) {
+      [](Level& l, const Interface& it, int every, Real band) {
         OutletSpec s;
         s.keep = it.shared_grid();
+        s.keep_faces = it.grid().faces().size();
         s.every = every;
+        s.band = band;
         return l.add_outlet(s);
       },
-      py::arg("interface"), py::arg("every"));
+      py::arg("interface"), py::arg("every"), py::arg("band"));
 }

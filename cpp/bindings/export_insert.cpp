@@ -200,6 +200,9 @@ void export_insert(py::module_& m) {
              py::dict d;
              d["removed_count"] = o.removed_count();
              d["removed_mass"] = o.removed_mass();
+             const Vec3& m = o.removed_moment();
+             d["removed_moment"] = py::make_tuple(m[0], m[1], m[2]);
+             d["removed_face_mass"] = to_numpy(o.removed_face_mass());
              return d;
            })
       .def("outlet_history",

@@ -241,6 +241,7 @@ void export_level(py::module_& m) {
       .def_property_readonly("num_owned", [](Level& l) { return l.particles().n_owned(); })
       .def_property_readonly("num_ghosts", [](Level& l) { return l.particles().n_ghost(); })
       .def_property_readonly("lost_particles", &Level::lost_particles)
+      .def_property_readonly("lost_mass", &Level::lost_mass)
       .def_property_readonly("rebuilds", &Level::rebuilds)
       .def_property_readonly("rebuild_seconds", &Level::rebuild_seconds)
       .def_property_readonly("halo_seconds", &Level::halo_seconds)

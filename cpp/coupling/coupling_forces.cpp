@@ -1,5 +1,6 @@
 #include "coupling/coupling_forces.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/errors.hpp"
@@ -52,14 +53,24 @@ void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Vis
   }
 }
 
-void CouplingForces::apply(ParticleStore& ps, const Domain& domain) const {
+void CouplingForces::apply(ParticleStore& ps, const Domain& domain, Real dt) const {
   const bool feedback = !acceleration.empty();
   if (!feedback && pressure.empty()) return;
+  const bool limited = !velocity_min.empty();
   const auto& faces = grid_->faces();
   for_each(
       ps, domain,
       [&](Index i, int c) {
-        if (feedback) ps.force[i] += ps.mass[i] * acceleration[c];
+        if (!feedback) return;
+        Vec3 a = acceleration[c];
+        if (limited)
+          for (int k = 0; k < 3; ++k) {
+            if (a[k] == 0) continue;
+            const Real room = a[k] > 0 ? velocity_max[c][k] - ps.velocity[i][k]
+                                       : velocity_min[c][k] - ps.velocity[i][k];
+            a[k] *= std::clamp(room / (a[k] * dt), Real(0), Real(1));
+          }
+        ps.force[i] += ps.mass[i] * a;
       },
       [&](Index i, int f, Real magnitude, Real) { ps.force[i] += magnitude * faces[f].normal; });
 }

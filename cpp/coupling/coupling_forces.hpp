@@ -3,7 +3,12 @@
 // hierarchy's controllers (python/grainscale/hierarchy.py) on the cells of one ExchangeGrid.
 //
 // Fine -> coarse, velocity feedback: every owned particle in cell c gets F = m a_c, the cell's
-// acceleration towards the fine Favre velocity (zero outside the coupled cells).
+// acceleration towards the fine Favre velocity (zero outside the coupled cells). With velocity
+// bounds per cell (the fine level's velocity range there), each component of a_c is scaled down
+// for a particle so that one step of it, a dt, does not carry the particle's velocity beyond the
+// bound it points to (the per-particle limiter of the reference implementation, LIGGGHTS-PFM's
+// fix forcecontrol/region, applied per component): the push follows the fine level's velocities,
+// whatever the coarse particle's own motion, so it can set a bed at rest in motion.
 //
 // Coarse -> fine, stress boundary condition: a particle within `layer` of an interface face
 // (inside the region, in that face's cell) is pushed along the face's inward normal with
@@ -35,12 +40,14 @@ class CouplingForces {
   const ExchangeGrid& grid() const { return *grid_; }
   // Per cell (m/s^2); empty: no velocity feedback.
   std::vector<Vec3> acceleration;
+  // Per cell (m/s), the limiter's bounds of the feedback; empty: no limiter.
+  std::vector<Vec3> velocity_min, velocity_max;
   // Per interface face (Pa, >= 0) and the limiter's speed (m/s); empty: no stress condition.
   std::vector<Real> pressure;
   std::vector<Real> max_inward_speed;
 
-  // Adds the forces to the owned particles of `ps`.
-  void apply(ParticleStore& ps, const Domain& domain) const;
+  // Adds the forces to the owned particles of `ps` (dt: the level's time step, for the limiter).
+  void apply(ParticleStore& ps, const Domain& domain, Real dt) const;
   // Per interface face: sum over the owned particles of |F_push| s (N m), this rank only.
   std::vector<Real> push_moment(const ParticleStore& ps, const Domain& domain) const;
 

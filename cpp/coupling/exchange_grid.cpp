@@ -57,7 +57,55 @@ ExchangeGrid::ExchangeGrid(const Region& region, Real cell_size, const Domain& d
         faces_.push_back(f);
         boundary_[c] = 1;
       }
+    interior_cells_ += !boundary_[c];
   }
+  if (interior_cells_ == 0)
+    throw_invalid(what + ".cell_size",
+                  "small enough that the region has interior cells (region cells with no "
+                  "interface face: at least 3 cells across the region between its faces)",
+                  cell_size);
+}
+
+bool ExchangeGrid::near_region(const Vec3& x, Real band) const {
+  const int c = grid_.cell_of(x);
+  if (inside(c)) return true;
+  // The region cells around x: those whose box lies within `band` of it.
+  const Vec3 lo = grid_.origin;
+  int k0[3], k1[3];
+  for (int a = 0; a < 3; ++a) {
+    k0[a] = std::max(0, static_cast<int>(std::floor((x[a] - band - lo[a]) / grid_.edge[a])));
+    k1[a] = std::min(grid_.dims[a] - 1,
+                     static_cast<int>(std::floor((x[a] + band - lo[a]) / grid_.edge[a])));
+    if (k0[a] > k1[a]) return false;
+  }
+  for (int i = k0[0]; i <= k1[0]; ++i)
+    for (int j = k0[1]; j <= k1[1]; ++j)
+      for (int k = k0[2]; k <= k1[2]; ++k) {
+        const int n = grid_.index(i, j, k);
+        if (!inside_[n]) continue;
+        const Vec3 cell_lo = lo + Vec3(i * grid_.edge[0], j * grid_.edge[1], k * grid_.edge[2]);
+        const Vec3 gap = (cell_lo - x).cwiseMax(x - cell_lo - grid_.edge).cwiseMax(0.0);
+        if (gap.squaredNorm() <= band * band) return true;
+      }
+  return false;
+}
+
+int ExchangeGrid::nearest_face(const Vec3& x) const {
+  int best = -1;
+  Real best_d2 = INFINITY;
+  for (std::size_t f = 0; f < faces_.size(); ++f) {
+    const InterfaceFace& face = faces_[f];
+    Vec3 gap = Vec3::Zero();
+    for (int a = 0; a < 3; ++a) {
+      const Real d = x[a] - face.centre[a];
+      gap[a] = a == face.axis ? d : std::max(std::abs(d) - 0.5 * grid_.edge[a], Real(0));
+    }
+    if (gap.squaredNorm() < best_d2) {
+      best_d2 = gap.squaredNorm();
+      best = static_cast<int>(f);
+    }
+  }
+  return best;
 }
 
 int ExchangeGrid::entry_face(const Vec3& from, const Vec3& to) const {

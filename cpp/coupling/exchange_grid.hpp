@@ -9,6 +9,9 @@
 //                   region cell, its axis and side, the unit normal into the region, centre and
 //                   area; faces on a closed side of the simulation box are left out (no particle
 //                   crosses them)
+//   interior cells  region cells that are not boundary cells: where the finer level's flow is
+//                   its own and drives the coarser level (fine -> coarse feedback). A grid
+//                   without one is refused: its cells are too coarse for the region.
 #pragma once
 
 #include <vector>
@@ -30,7 +33,8 @@ struct InterfaceFace {
 
 class ExchangeGrid {
  public:
-  // Throws InvalidArgument (naming `what`) for a non-positive cell size or a region with no cell.
+  // Throws InvalidArgument (naming `what`) for a non-positive cell size or a region with no
+  // cell, or no interior cell.
   ExchangeGrid(const Region& region, Real cell_size, const Domain& domain, const std::string& what);
 
   const FieldGrid& grid() const { return grid_; }
@@ -42,6 +46,11 @@ class ExchangeGrid {
   // The interface faces of a cell (indices into faces()).
   const std::vector<int>& faces_of(int cell) const { return faces_of_[cell]; }
   int region_cells() const { return region_cells_; }
+  int interior_cells() const { return interior_cells_; }
+  // Whether x lies in a region cell or within `band` of one (band < the smallest cell edge).
+  bool near_region(const Vec3& x, Real band) const;
+  // The interface face whose rectangle is nearest to x; -1 if there is no face.
+  int nearest_face(const Vec3& x) const;
   // The face a straight move from `from` (outside the region cells) to `to` (inside) enters
   // through: the face between the last outside cell and the first region cell along the
   // segment; -1 when the segment never enters or enters through no interface face.
@@ -52,7 +61,7 @@ class ExchangeGrid {
   std::vector<char> inside_, boundary_;
   std::vector<InterfaceFace> faces_;
   std::vector<std::vector<int>> faces_of_;
-  int region_cells_ = 0;
+  int region_cells_ = 0, interior_cells_ = 0;
 };
 
 }  // namespace grainscale

@@ -11,8 +11,13 @@ namespace grainscale {
 
 FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
                            const SizeDistribution& radius, Real density, std::int32_t material,
-                           Real spin_scale, std::uint64_t seed)
-    : radius_(radius), density_(density), material_(material), spin_scale_(spin_scale), rng_(seed) {
+                           Real spin_scale, Real deadband, std::uint64_t seed)
+    : radius_(radius),
+      density_(density),
+      material_(material),
+      spin_scale_(spin_scale),
+      deadband_(deadband),
+      rng_(seed) {
   const int a = face.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();
   e1[b] = grid.edge[b];
@@ -31,10 +36,50 @@ void FluxInserter::feed(Real mass, const Vec3& velocity, const Vec3& spin) {
   owed_ += mass;
   velocity_ = velocity;
   spin_ = spin_scale_ * spin;
-  while (owed_ >= mass_of(next_)) {
-    owed_ -= mass_of(next_);
-    pending_.push_back(next_);
-    next_ = radius_.sample(rng_);
+  settle();
+}
+
+void FluxInserter::set_velocity(const Vec3& velocity) {
+  velocity_ = velocity;
+  spin_ = Vec3::Zero();
+}
+
+void FluxInserter::credit(Real mass) {
+  if (!(mass > 0)) return;
+  credited_mass_ += mass;
+  owed_ += mass;
+  settle();
+}
+
+void FluxInserter::debit(Real mass) {
+  if (!(mass > 0)) return;
+  debited_mass_ += mass;
+  owed_ -= mass;
+  settle();
+}
+
+void FluxInserter::extracted(Real mass) {
+  extracted_mass_ += mass;
+  owed_ += mass;
+}
+
+void FluxInserter::settle() {
+  if (owed_ > 0 && advance_ > 0) {  // what comes in repays the advance first
+    const Real repaid = std::min(owed_, advance_);
+    owed_ -= repaid;
+    advance_ -= repaid;
+  }
+  // Out of the dead band (or already scheduling): the whole balance.
+  if (owed_ > deadband_ || !pending_.empty())
+    while (owed_ >= mass_of(next_)) {
+      owed_ -= mass_of(next_);
+      pending_.push_back(next_);
+      next_ = radius_.sample(rng_);
+    }
+  // A debt cancels what waits, latest first, before anything is taken from the child's bed.
+  while (owed_ < 0 && !pending_.empty()) {
+    owed_ += mass_of(pending_.back());
+    pending_.pop_back();
   }
 }
 
@@ -42,35 +87,33 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
                                 std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
   place_pending(pending_, shell_, 50, rng_, grid, walls, position, radius);
-  add_mass(inserted_mass_, radius, before);
-  const std::size_t from_flux = radius.size() - before;
-  inserted_count_ += static_cast<std::int64_t>(from_flux);
-  if (!(top_up_ > 0) || !pending_.empty()) {  // flux first: no top-up while it still waits
-    top_up_ = 0;
-    return from_flux;
+  for (std::size_t k = before; k < radius.size(); ++k) inserted_mass_ += mass_of(radius[k]);
+  if (advance_budget_ > 0 && pending_.empty()) {
+    // Ahead of the flux, up to the budget, by the same placement rule; what finds no room
+    // lapses with the budget.
+    std::vector<Real> extra;
+    for (Real budget = advance_budget_;;) {
+      const Real r = radius_.sample(rng_);
+      if (mass_of(r) > budget) break;
+      budget -= mass_of(r);
+      extra.push_back(r);
+    }
+    const std::size_t start = radius.size();
+    place_pending(extra, shell_, 50, rng_, grid, walls, position, radius);
+    for (std::size_t k = start; k < radius.size(); ++k) {
+      inserted_mass_ += mass_of(radius[k]);
+      advanced_mass_ += mass_of(radius[k]);
+      advance_ += mass_of(radius[k]);
+    }
   }
-  // Extra particles up to the budget, placed by the same rule as the flux's (give up after a
-  // run of failures); what finds no room lapses with the budget.
-  std::vector<Real> extra;
-  for (Real budget = top_up_;;) {
-    const Real r = radius_.sample(rng_);
-    if (mass_of(r) > budget) break;
-    budget -= mass_of(r);
-    extra.push_back(r);
-  }
-  top_up_ = 0;
-  const std::size_t start = radius.size();
-  place_pending(extra, shell_, 50, rng_, grid, walls, position, radius);
-  add_mass(topped_up_mass_, radius, start);
-  return from_flux;
-}
-
-void FluxInserter::add_mass(Real& total, const std::vector<Real>& radius, std::size_t first) const {
-  for (std::size_t k = first; k < radius.size(); ++k) total += mass_of(radius[k]);
+  advance_budget_ = 0;
+  const std::size_t placed = radius.size() - before;
+  inserted_count_ += static_cast<std::int64_t>(placed);
+  return placed;
 }
 
 Real FluxInserter::pending_mass() const {
-  Real m = owed_;
+  Real m = owed_ - advance_;
   for (Real r : pending_) m += mass_of(r);
   return m;
 }
@@ -78,8 +121,9 @@ Real FluxInserter::pending_mass() const {
 std::string FluxInserter::save_state() const {
   std::ostringstream out;
   out.precision(std::numeric_limits<Real>::max_digits10);
-  out << "flux-v2 " << topped_up_mass_ << ' ' << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' '
-      << inserted_mass_ << ' ' << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1]
+  out << "flux-v3 " << owed_ << ' ' << next_ << ' ' << fed_mass_ << ' ' << credited_mass_ << ' '
+      << debited_mass_ << ' ' << inserted_mass_ << ' ' << extracted_mass_ << ' ' << advanced_mass_
+      << ' ' << advance_ << ' ' << inserted_count_ << ' ' << velocity_[0] << ' ' << velocity_[1]
       << ' ' << velocity_[2] << ' ' << spin_[0] << ' ' << spin_[1] << ' ' << spin_[2];
   write_pending(out, pending_, rng_);
   return out.str();
@@ -88,24 +132,35 @@ std::string FluxInserter::save_state() const {
 void FluxInserter::load_state(const std::string& state) {
   std::istringstream in(state);
   std::string tag;
-  Real owed = 0, next = 0, fed = 0, inserted = 0, topped = 0;
+  Real owed = 0, next = 0, fed = 0, credited = 0, debited = 0, inserted = 0, extracted = 0;
+  Real advanced = 0, advance = 0, topped = 0;
   std::int64_t count = 0;
   Vec3 v, w;
   in >> tag;
-  if (tag == "flux-v2") in >> topped;  // v1: written before the top-up
-  in >> owed >> next >> fed >> inserted >> count >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >> w[2];
+  if (tag == "flux-v3") {
+    in >> owed >> next >> fed >> credited >> debited >> inserted >> extracted >> advanced >>
+        advance >> count;
+  } else {
+    if (tag == "flux-v2") in >> topped;  // v1: written before the top-up
+    in >> owed >> next >> fed >> inserted >> count;
+  }
+  in >> v[0] >> v[1] >> v[2] >> w[0] >> w[1] >> w[2];
   std::vector<Real> pending;
   Rng rng;
   read_pending(in, pending, rng);
-  if ((tag != "flux-v1" && tag != "flux-v2") || in.fail())
+  if ((tag != "flux-v1" && tag != "flux-v2" && tag != "flux-v3") || in.fail())
     throw_invalid("FluxInserter state", "text written by save_state()", "'" + tag + " ...'");
   owed_ = owed;
   next_ = next;
   fed_mass_ = fed;
+  credited_mass_ = credited;
+  debited_mass_ = debited;
   inserted_mass_ = inserted;
+  extracted_mass_ = extracted;
+  advanced_mass_ = advanced;
+  advance_ = advance;
+  advance_budget_ = 0;
   inserted_count_ = count;
-  topped_up_mass_ = topped;
-  top_up_ = 0;
   velocity_ = v;
   spin_ = w;
   pending_.swap(pending);

@@ -1,20 +1,35 @@
-// Coarse -> fine, particles entering (DESIGN.md 4): the fine level's insertion at one interface
-// face. The mass the coarse level carried across the face in an interval (FaceFluxMeter) is
-// fed here and turned into fine particles drawn from the fine size distribution: a particle is
-// scheduled once the mass owed reaches its mass, so inserted + pending + owed always equals the
-// mass fed (nothing is dropped; the owed remainder is less than one fine particle). Scheduled
-// particles are placed without overlaps in a shell at the face (the face rectangle, two largest
-// fine diameters deep, at most the cell's depth, starting one smallest radius outside the face so
-// that centres reach the face: a grain of the bed beyond straddles it, and a shell flush with the
-// face would leave the face's cell short of a layer r thick) with the face's mass-weighted
-// velocity and its spin scaled by the size ratio (w R kept: the surface speed of a spinning
-// grain); what finds no room waits for the next interval.
+// The transfer ledger of one interface face between a level of a hierarchy (the parent) and the
+// finer level in its region (the child), DESIGN.md 4, and the child's insertion there.
 //
-// Top-up (Exchange.top_up): where the coarse level holds a dense bed above the face, that bed
-// sinks into any room the fine bed leaves below it, which the flux measured on the coarse level
-// does not see. A top-up budget lets the inserter place extra particles in the shell, with the
-// coarse cell's velocity, up to the budget, by the flux's placement rule; they are booked apart
-// (topped_up_mass) and never owed: what does not fit lapses with the budget.
+// The parent's crossings define what passes the face; the child's content follows them exactly:
+//   feed    mass the parent carried in across the face (FaceFluxMeter): owed to the child
+//   debit   mass the parent carried out across the face: the child owes it
+//   credit  mass of the child's particles that left its region through the face (deleted by the
+//           region outlet): owed back to the child, since the parent did not carry it out
+// The signed balance, owed = fed + credited - debited - inserted + extracted, is paid by the
+// child once it leaves a dead band of +-`deadband` (the mass of one parent particle: a parent
+// particle that crosses the face and back, as one sitting on it does, causes no churn): above
+// it, fine particles drawn from the fine size distribution are scheduled for the whole balance
+// (the unscheduled remainder is less than one fine particle) and placed without overlaps in a
+// shell at the face; a negative balance cancels scheduled particles first, and below the band
+// the child's particles nearest the face are removed for the whole balance (extracted, by the
+// Interface). So fed + credited - debited = inserted - extracted + pending exactly, up to the
+// rounding of the sums, with pending = owed + scheduled (signed: negative is the child's debt).
+//
+// Advance: where the parent holds a dense bed beyond a face, that bed sinks into any room the
+// child's bed leaves below it, which the parent's crossings deliver only later (and, its packing
+// being its own, in other amounts per cell). An advance budget lets the inserter place extra
+// particles now; the advance stays outstanding (negative pending) until what the parent then
+// carries in repays it, before anything more is scheduled. So the books stay exact:
+// fed + credited - debited = inserted - extracted + pending, pending = owed + scheduled -
+// outstanding advance.
+//
+// The shell is the face rectangle, two largest fine diameters deep (at most the cell's depth),
+// starting one smallest fine radius outside the face, so that centres reach the face as the
+// grains of the bed beyond do (a shell flush with the face would leave the face's cell short of
+// a layer r thick). Particles are placed with the face's mass-weighted inflow velocity (or, in
+// an interval without inflow, the parent's velocity beyond the face) and the inflow spin scaled
+// by the size ratio (w R kept: the surface speed of a spinning grain); what finds no room waits.
 #pragma once
 
 #include <cstdint>
@@ -32,60 +47,77 @@ namespace grainscale {
 
 class FluxInserter {
  public:
-  // spin_scale: coarse / fine particle size, applied to the fed spin.
+  // spin_scale: coarse / fine particle size, applied to the fed spin; deadband (kg).
   FluxInserter(const InterfaceFace& face, const FieldGrid& grid, const SizeDistribution& radius,
-               Real density, std::int32_t material, Real spin_scale, std::uint64_t seed);
+               Real density, std::int32_t material, Real spin_scale, Real deadband,
+               std::uint64_t seed);
 
   // Books `mass` (kg) entering with mean velocity `velocity` and spin `spin` (coarse).
   void feed(Real mass, const Vec3& velocity, const Vec3& spin);
-  // At most `mass` (kg) of extra particles, entering with `velocity` (the coarse cell's), at the
-  // next place(); then the budget lapses.
-  void allow_top_up(Real mass, const Vec3& velocity) {
-    top_up_ = mass > 0 ? mass : 0;
-    top_up_velocity_ = velocity;
-  }
+  // Velocity (and zero spin) of the particles placed after an interval without inflow.
+  void set_velocity(const Vec3& velocity);
+  void credit(Real mass);
+  void debit(Real mass);
+  // At most `mass` (kg) of particles placed ahead of the flux at the next place(), with the
+  // current velocity; then the budget lapses.
+  void allow_advance(Real mass) { advance_budget_ = mass > 0 ? mass : 0; }
+  Real outstanding_advance() const { return advance_; }
+  // Mass (kg) the child owes at this face now, once beyond the dead band: what extraction must
+  // remove.
+  Real owing() const { return owed_ < -deadband_ ? -owed_ : 0; }
+  // Books child particles of `mass` (kg) removed to pay owing().
+  void extracted(Real mass);
+
   const Region& shell() const { return shell_; }
   Real max_radius() const { return radius_.max_radius(); }
-  // Places scheduled particles (in order), then the top-up; placed ones are appended. Returns
-  // how many of the appended came from the flux (the rest are top-up).
+  // Places scheduled particles (in order), then, if none waits, up to the advance budget; placed
+  // ones are appended. Returns how many.
   std::size_t place(OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
                     std::vector<Real>& radius);
-  bool waiting() const { return !pending_.empty() || top_up_ > 0; }
+  bool waiting() const { return !pending_.empty() || advance_budget_ > 0; }
 
   std::int32_t material() const { return material_; }
   const Vec3& velocity() const { return velocity_; }
-  const Vec3& top_up_velocity() const { return top_up_velocity_; }
   const Vec3& spin() const { return spin_; }
   Real fed_mass() const { return fed_mass_; }
+  Real credited_mass() const { return credited_mass_; }
+  Real debited_mass() const { return debited_mass_; }
   Real inserted_mass() const { return inserted_mass_; }
+  Real extracted_mass() const { return extracted_mass_; }
+  Real advanced_mass() const { return advanced_mass_; }  // placed ahead, in all
   std::int64_t inserted_count() const { return inserted_count_; }
-  Real topped_up_mass() const { return topped_up_mass_; }
-  // Scheduled but not placed, plus the owed remainder: fed = inserted + pending, exactly up to
-  // the rounding of the sums.
+  // Scheduled but not placed, plus the signed unscheduled balance, less the outstanding advance
+  // (see the header).
   Real pending_mass() const;
   Real mass_of(Real r) const { return density_ * (4.0 / 3.0) * M_PI * r * r * r; }
-  // Adds the masses of radius[first:] to `total`, one by one.
-  void add_mass(Real& total, const std::vector<Real>& radius, std::size_t first) const;
 
   std::string save_state() const;
+  // Reads every format save_state() has written ("flux-v1" and "flux-v2" from before the ledger:
+  // nothing credited, debited, extracted or advanced; v2's top-up mass, placed outside the books,
+  // is not kept).
   void load_state(const std::string& state);
 
  private:
+  // Repays the advance from a positive balance, turns the rest into scheduled particles, or
+  // cancels scheduled ones against a negative balance.
+  void settle();
+
   SizeDistribution radius_;
   Real density_ = 0;
   std::int32_t material_ = 0;
   Real spin_scale_ = 1;
+  Real deadband_ = 0;
   Region shell_ = Region::box(Vec3::Zero(), Vec3::Ones());
   Rng rng_;
-  Real owed_ = 0;  // fed but not yet scheduled (less than next_'s mass)
+  Real owed_ = 0;  // signed unscheduled balance (less than next_'s mass when positive)
   Real next_ = 0;  // radius of the next particle to schedule
   std::vector<Real> pending_;
   Vec3 velocity_ = Vec3::Zero(), spin_ = Vec3::Zero();
-  Real fed_mass_ = 0, inserted_mass_ = 0;
+  Real fed_mass_ = 0, credited_mass_ = 0, debited_mass_ = 0, inserted_mass_ = 0,
+       extracted_mass_ = 0, advanced_mass_ = 0;
+  Real advance_ = 0;         // outstanding (kg)
+  Real advance_budget_ = 0;  // of the next place() (kg)
   std::int64_t inserted_count_ = 0;
-  Real top_up_ = 0;  // budget of the next place() (kg)
-  Vec3 top_up_velocity_ = Vec3::Zero();
-  Real topped_up_mass_ = 0;
 };
 
 }  // namespace grainscale

@@ -1,9 +1,16 @@
 // Interface: the coupling between a level of a hierarchy (the parent) and the finer level
 // embedded in a region of it (the child), DESIGN.md 4. It holds the ExchangeGrid of the region,
-// the parent's face flux meter, the child's flux inserters (one per interface face) and a cell
-// averager on each side; the hierarchy (python/grainscale/hierarchy.py) calls it once per
+// the parent's face flux meter, the transfer ledger and inserter of every interface face, and a
+// cell averager on each side; the hierarchy (python/grainscale/hierarchy.py) calls it once per
 // exchange interval and computes the controllers from the averages. Every call that takes a
 // Level is collective over that level's ranks.
+//
+// Mass is exchanged, never created: what the parent carries in across a face is owed to the
+// child, what it carries out the child owes, and what leaves the child's region through a face is
+// owed back to it (FluxInserter). The child pays by insertion or by extraction (its particles
+// nearest the face removed). What the child discharges (outlets, closed sides) the parent's
+// material in the region must give up as well: the hierarchy books that debt and pays what the
+// parent's own outflow leaves unpaid with remove_shadow().
 #pragma once
 
 #include <memory>
@@ -24,8 +31,8 @@ struct InterfaceSpec {
   Real fine_density = 0;  // kg/m^3
   std::int32_t fine_material = 0;
   Real size_ratio = 1;  // parent / child particle size (h_parent / h_child)
+  Real deadband = 0;    // kg, of the faces' ledgers: the largest parent particle's mass
   std::uint64_t seed = 0;
-  Real layer = 0, fade = 0;  // stress layer thickness and its fade (m)
 };
 
 class Interface {
@@ -40,11 +47,25 @@ class Interface {
   // Parent: the start and the end of an interval of the flux meter (margin: how far outside
   // the grid particles are tracked, m).
   void start_flux(Level& parent, Real margin);
-  std::vector<FaceFlux> finish_flux(Level& parent);
-  // Child: books the fluxes at the faces' inserters and places what they owe; returns the
-  // number of fine particles placed now.
-  void feed(const std::vector<FaceFlux>& fluxes);
+  IntervalFlux finish_flux(Level& parent);
+  // Child: books an interval of the parent's crossings (inflow fed, outflow debited); `beyond`:
+  // per face, the velocity of what is placed at a face that had no inflow (the parent's velocity
+  // beyond it).
+  void book(const IntervalFlux& flux, const std::vector<Vec3>& beyond);
+  // Child: per face, the mass of the child's particles that left the region through it.
+  void credit(const std::vector<Real>& left);
+  // Collective: pays the faces' debts by removing the child's particles in each indebted face's
+  // shell, nearest the face first; returns the mass removed (kg).
+  Real extract(Level& child);
+  // Collective: places what the faces owe the child; returns the number of particles placed.
   std::int64_t insert(Level& child);
+  // Collective: removes parent particles in the region cells, one at a time while the next one's
+  // mass fits the remaining `budget` (kg), each from the cell with the largest remaining
+  // `excess` (kg per grid cell: how much more the parent holds there than the child; reduced by
+  // each removal), the one nearest the cell's centre; once no cell has excess left, the ones
+  // nearest to `near`. Returns the mass removed.
+  Real remove_shadow(Level& parent, std::vector<Real> excess, const Vec3& near, Real budget);
+
   const std::vector<FluxInserter>& inserters() const { return inserters_; }
   std::vector<FluxInserter>& inserters() { return inserters_; }
 

@@ -22,9 +22,13 @@ class ExchangeGrid;
 struct OutletSpec {
   Region region = Region::box(Vec3::Zero(), Vec3::Ones());
   int every = 1;  // steps between checks
-  // When set, the outlet removes the particles outside the grid's region cells instead (the
-  // fine level of a hierarchy: particles leaving its region), and `region` is not used.
+  // When set, the outlet removes the particles farther than `band` (m) from the grid's region
+  // cells instead (the fine level of a hierarchy: particles leaving its region; the band keeps
+  // the grains its insertion shells place with the centre just outside a face), books them per
+  // interface face (the nearest one), and `region` is not used.
   std::shared_ptr<const ExchangeGrid> keep;
+  Real band = 0;
+  std::size_t keep_faces = 0;  // the grid's number of interface faces
 };
 
 class Outlet {
@@ -34,11 +38,19 @@ class Outlet {
 
   const OutletSpec& spec() const { return spec_; }
   bool due(std::int64_t step) const { return step % spec_.every == 0; }
-  // Books removed particles (count, total mass) at `time`.
-  void record(Real time, std::int64_t count, Real mass);
+  // Books removed particles (count, total mass, first moment sum m x, and with a `keep` grid the
+  // mass per interface face) at `time`.
+  void record(Real time, std::int64_t count, Real mass, const Vec3& moment,
+              const std::vector<Real>& face_mass);
+  // Interface faces booked per removal (0 without a `keep` grid).
+  std::size_t n_faces() const { return face_mass_.size(); }
 
   std::int64_t removed_count() const { return removed_count_; }
   Real removed_mass() const { return removed_mass_; }
+  // Sum of m x over the removed particles (kg m): their centre of mass is moment / mass.
+  const Vec3& removed_moment() const { return moment_; }
+  // With a `keep` grid: removed mass per interface face (kg).
+  const std::vector<Real>& removed_face_mass() const { return face_mass_; }
   // History: one entry at registration and one per check that removed something.
   const std::vector<Real>& history_time() const { return time_; }
   const std::vector<Real>& history_mass() const { return mass_; }
@@ -51,6 +63,8 @@ class Outlet {
   OutletSpec spec_;
   std::int64_t removed_count_ = 0;
   Real removed_mass_ = 0;
+  Vec3 moment_ = Vec3::Zero();
+  std::vector<Real> face_mass_;
   std::vector<Real> time_, mass_;
   std::vector<std::int64_t> count_;
 };

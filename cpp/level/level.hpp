@@ -128,6 +128,11 @@ class Level {
   Real time() const { return time_; }
   // Collective: particles that left through a closed side, over all ranks.
   std::int64_t lost_particles() const { return comm_.sum(lost_); }
+  Real lost_mass() const { return comm_.sum(lost_mass_); }  // kg, collective
+  // Global ids of this rank's particles lost since clear_lost_log() (a hierarchy's flux meter
+  // tells losses from discharges with it; not checkpointed: cleared every exchange interval).
+  const std::vector<GlobalId>& lost_log() const { return lost_log_; }
+  void clear_lost_log() { lost_log_.clear(); }
   std::int64_t rebuilds() const { return rebuilds_; }
   // Wall-clock seconds spent in neighbour-list rebuilds (sorting, ghosts, lists, histories).
   double rebuild_seconds() const { return rebuild_seconds_; }
@@ -210,7 +215,7 @@ class Level {
   void rebuild();
   void save_insertion_state(LevelState& state) const;
   void check_signature(const LevelState& state) const;
-  void load_scalars(const LevelState& state, std::int64_t lost);
+  void load_scalars(const LevelState& state, std::int64_t lost, Real lost_mass);
   void load_walls(const LevelState& state);
   void load_insertion_state(const LevelState& state);
   // Insertion and outlets (level/level_insert.cpp): runs once per step after the drift;
@@ -264,6 +269,8 @@ class Level {
   Real time_at_dt_change_ = 0;
   std::int64_t step_at_dt_change_ = 0;
   std::int64_t lost_ = 0;
+  Real lost_mass_ = 0;  // this rank's
+  std::vector<GlobalId> lost_log_;
   std::int64_t rebuilds_ = 0;
   double rebuild_seconds_ = 0;
   double halo_seconds_ = 0;

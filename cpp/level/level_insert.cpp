@@ -223,19 +223,22 @@ void Level::apply_insertions_and_outlets() {
 void Level::apply_outlets() {
   std::vector<Index> gone;
   std::vector<char> taken;  // a particle inside two outlets is counted by the first
-  std::vector<Real> tally;  // count and mass per outlet due now, summed over the ranks
+  // Per outlet due now, summed over the ranks: count, mass, moment (3), then the face masses of
+  // an outlet with a `keep` grid.
+  std::vector<Real> tally;
   for (Outlet& outlet : outlets_) {
     if (!outlet.due(step_)) continue;
     const Region& region = outlet.spec().region;
     const ExchangeGrid* keep = outlet.spec().keep.get();
+    const Real band = outlet.spec().band;
     // Most particles are far from an outlet: a bounding-box test first (this runs every step).
     Vec3 lo, hi;
     region.bounds(lo, hi);
-    std::int64_t count = 0;
-    Real mass = 0;
+    const std::size_t at = tally.size();
+    tally.resize(at + 5 + outlet.n_faces(), 0.0);
     for (Index i = 0; i < ps_.n_owned(); ++i) {
       const Vec3 x = wrapped(domain_, ps_.position[i]);
-      if (keep ? keep->contains(x)
+      if (keep ? keep->near_region(x, band)
                : (x[0] < lo[0] || x[1] < lo[1] || x[2] < lo[2] || x[0] > hi[0] || x[1] > hi[1] ||
                   x[2] > hi[2] || !region.contains(x)))
         continue;
@@ -245,20 +248,27 @@ void Level::apply_outlets() {
         taken[i] = 1;
       }
       gone.push_back(i);
-      ++count;
-      mass += ps_.mass[i];
+      const Real m = ps_.mass[i];
+      tally[at] += 1;
+      tally[at + 1] += m;
+      for (int a = 0; a < 3; ++a) tally[at + 2 + a] += m * x[a];
+      if (keep) {
+        const int f = keep->nearest_face(x);
+        if (f >= 0) tally[at + 5 + f] += m;
+      }
     }
-    tally.push_back(static_cast<Real>(count));
-    tally.push_back(mass);
   }
   if (tally.empty()) return;  // no outlet due (the same on every rank: a function of the step)
   comm_.sum_in_place(tally);
-  std::size_t k = 0;
+  std::size_t at = 0;
   for (Outlet& outlet : outlets_) {
     if (!outlet.due(step_)) continue;
-    const auto count = static_cast<std::int64_t>(tally[2 * k]);
-    if (count > 0) outlet.record(time_, count, tally[2 * k + 1]);
-    ++k;
+    const auto count = static_cast<std::int64_t>(tally[at]);
+    const std::size_t nf = outlet.n_faces();
+    if (count > 0)
+      outlet.record(time_, count, tally[at + 1], Vec3(tally[at + 2], tally[at + 3], tally[at + 4]),
+                    std::vector<Real>(tally.begin() + at + 5, tally.begin() + at + 5 + nf));
+    at += 5 + nf;
   }
   if (!gone.empty()) remove_owned(gone);
 }
@@ -287,15 +297,14 @@ std::int64_t Level::insert_flux(std::vector<FluxInserter>& inserters) {
     if (!f.waiting()) continue;
     x.clear();
     r.clear();
-    const std::size_t from_flux = f.place(grid, walls, x, r);
+    f.place(grid, walls, x, r);
     if (r.empty()) continue;
     const Index n = static_cast<Index>(r.size());
     std::vector<Real> flat(3 * n), v(3 * n), w(3 * n);
     for (Index k = 0; k < n; ++k)
       for (int a = 0; a < 3; ++a) {
         flat[3 * k + a] = x[k][a];
-        v[3 * k + a] =
-            static_cast<std::size_t>(k) < from_flux ? f.velocity()[a] : f.top_up_velocity()[a];
+        v[3 * k + a] = f.velocity()[a];
         w[3 * k + a] = f.spin()[a];
       }
     const std::vector<std::int32_t> mat(n, f.material());

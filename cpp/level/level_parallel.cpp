@@ -56,7 +56,12 @@ void Level::drop_lost() {
   std::vector<Index> order;
   order.reserve(kept);
   for (Index i = 0; i < n; ++i)
-    if (inside(i)) order.push_back(i);
+    if (inside(i)) {
+      order.push_back(i);
+    } else {
+      lost_mass_ += ps_.mass[i];
+      lost_log_.push_back(ps_.id[i]);
+    }
   lost_ += n - kept;
   ps_.select_owned(order);
   std::vector<Index> new_origin(order.size());

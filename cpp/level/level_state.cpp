@@ -37,6 +37,14 @@ const std::vector<double>& reals(const LevelState& s, const std::string& key) {
   return it->second;
 }
 
+// The rank's lost mass (kg); 0 in checkpoints written before it was kept.
+Real saved_lost_mass(const LevelState& s) {
+  auto it = s.reals.find("counters/lost_mass");
+  if (it == s.reals.end()) return 0;
+  if (it->second.size() != 1) throw std::runtime_error("checkpoint lost mass is corrupt");
+  return it->second[0];
+}
+
 const std::vector<std::int64_t>& ints(const LevelState& s, const std::string& key) {
   auto it = s.ints.find(key);
   if (it == s.ints.end()) throw std::runtime_error("checkpoint lacks '" + key + "'");
@@ -160,6 +168,7 @@ LevelState Level::save_state() {
                        stats_.contacts};
   s.reals["scalars"] = {time_, time_at_dt_change_, dt_,
                         skin_, mesh_bin_margin_,   stats_.max_overlap_ratio};
+  s.reals["counters/lost_mass"] = {lost_mass_};
   put(s, "particles/position", ps_.position.data(), nl);
   put(s, "particles/velocity", ps_.velocity.data(), nl);
   put(s, "particles/angular_velocity", ps_.angular_velocity.data(), nl);
@@ -263,14 +272,15 @@ void Level::check_signature(const LevelState& s) const {
 }
 
 // Scalars shared by every rank's state (step, time, ids, time step, skin, statistics); `lost`
-// is the rank's own count.
-void Level::load_scalars(const LevelState& s, std::int64_t lost) {
+// and `lost_mass` are the rank's own.
+void Level::load_scalars(const LevelState& s, std::int64_t lost, Real lost_mass) {
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
   step_ = si[0];
   step_at_dt_change_ = si[1];
   next_id_ = si[2];
   lost_ = lost;
+  lost_mass_ = lost_mass;
   rebuilds_ = si[4];
   stats_.contacts = si[6];
   time_ = sr[0];
@@ -378,7 +388,7 @@ void Level::load_state(const LevelState& s) {
     throw std::runtime_error("checkpoint contact lists do not match the particle count");
 
   load_walls(s);
-  load_scalars(s, ints(s, "scalars")[3]);
+  load_scalars(s, ints(s, "scalars")[3], saved_lost_mass(s));
   load_insertion_state(s);
   origin_.assign(no, -1);
   pair_carry_ = HistoryCarry();
@@ -409,6 +419,7 @@ void Level::load_redistributed(const std::vector<LevelState>& states) {
   pair_carry_.start(stride);
   wall_carry_.start(stride);
   std::int64_t lost = 0;
+  Real lost_mass = 0;
   for (const LevelState& s : states) {
     const SavedParticles saved(s, materials_.n_materials());
     ContactList pairs, walls;
@@ -440,6 +451,7 @@ void Level::load_redistributed(const std::vector<LevelState>& states) {
       carry(walls, k, false, wall_carry_);
     }
     lost += ints(s, "scalars")[3];
+    lost_mass += saved_lost_mass(s);
   }
   ps_ = std::move(fresh);
   origin_.resize(ps_.n_owned());
@@ -450,7 +462,7 @@ void Level::load_redistributed(const std::vector<LevelState>& states) {
   x_at_build_.clear();
 
   load_walls(first);
-  load_scalars(first, comm_.rank() == 0 ? lost : 0);
+  load_scalars(first, comm_.rank() == 0 ? lost : 0, comm_.rank() == 0 ? lost_mass : 0);
   load_insertion_state(first);
   // The saved forces are complete (ghost shares folded in): the first step uses them; the lists
   // are built for this decomposition first, restoring the histories from the carries.

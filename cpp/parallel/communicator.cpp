@@ -187,6 +187,15 @@ std::vector<char> Communicator::allgather(const std::vector<char>& mine,
 #endif
 }
 
+std::vector<Real> Communicator::allgather(const std::vector<Real>& mine) const {
+  std::vector<char> bytes(mine.size() * sizeof(Real));
+  if (!bytes.empty()) std::memcpy(bytes.data(), mine.data(), bytes.size());
+  const std::vector<char> all = allgather(bytes, nullptr);
+  std::vector<Real> values(all.size() / sizeof(Real));
+  if (!values.empty()) std::memcpy(values.data(), all.data(), all.size());
+  return values;
+}
+
 std::vector<char> Communicator::alltoall(const std::vector<std::vector<char>>& send) const {
   if (static_cast<int>(send.size()) != size_)
     throw std::logic_error("Communicator::alltoall needs one buffer per rank");

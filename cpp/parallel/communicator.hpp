@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,6 +21,18 @@
 #include "core/types.hpp"
 
 namespace grainscale {
+
+// A global id carried bit for bit in a Real slot of a record (and back).
+inline Real id_bits(GlobalId id) {
+  Real r;
+  std::memcpy(&r, &id, sizeof r);
+  return r;
+}
+inline GlobalId bits_id(Real r) {
+  GlobalId id;
+  std::memcpy(&id, &r, sizeof id);
+  return id;
+}
 
 // Messages in flight (Communicator::start_sendrecv); finished by Communicator::wait.
 class Requests {
@@ -65,6 +78,9 @@ class Communicator {
 
   // Concatenation of every rank's bytes in rank order (on every rank); `counts` gets the sizes.
   std::vector<char> allgather(const std::vector<char>& mine, std::vector<int>* counts) const;
+  // The same for values (rows of records packed as Real; ids travel as their bits: id_bits,
+  // bits_id).
+  std::vector<Real> allgather(const std::vector<Real>& mine) const;
   // Personalised exchange: send[r] goes to rank r; returns what every rank sent here, in rank
   // order.
   std::vector<char> alltoall(const std::vector<std::vector<char>>& send) const;

@@ -28,21 +28,31 @@ from .simulation import Simulation
 
 class CellAverages:
     """Cell averages of ``sim`` over the box ``region`` cut into cells of about ``cell_size``
-    (m; the edges are adjusted so that a whole number of cells fills the box)."""
+    (m, one value or one per axis; the edges are adjusted so that a whole number of cells fills
+    the box)."""
 
-    def __init__(self, sim: Simulation, region: Box, cell_size: float) -> None:
+    def __init__(
+        self, sim: Simulation, region: Box, cell_size: float | tuple[float, float, float]
+    ) -> None:
         if not isinstance(sim, Simulation):
             raise ValueError(f"CellAverages.sim must be a grainscale.Simulation, got {sim!r}")
         if not isinstance(region, Box):
             raise ValueError(f"CellAverages.region must be a grainscale.Box, got {region!r}")
-        positive("CellAverages", "cell_size", cell_size, " (m)")
+        sizes = np.broadcast_to(np.asarray(cell_size, dtype=object), (3,))
+        if np.ndim(cell_size) not in (0, 1) or np.size(cell_size) not in (1, 3):
+            raise ValueError(
+                f"CellAverages.cell_size must be a number or 3 numbers (m), got {cell_size!r}"
+            )
+        edges = [positive("CellAverages", "cell_size", v, " (m)") for v in sizes]
         if not sim.record_contacts:
             raise ValueError(
                 "CellAverages needs Simulation(record_contacts=True) for the contact stress, got "
                 "record_contacts=False"
             )
         length = np.asarray(region.hi, float) - np.asarray(region.lo, float)
-        self.dims = tuple(max(1, int(round(float(L) / cell_size))) for L in length)
+        self.dims = tuple(
+            max(1, int(round(float(L) / e))) for L, e in zip(length, edges, strict=True)
+        )
         self.edge = tuple(float(L) / n for L, n in zip(length, self.dims, strict=True))
         self.origin = tuple(float(v) for v in region.lo)
         self.sim = sim

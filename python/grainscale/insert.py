@@ -639,6 +639,12 @@ class OutletHandle:
         """Mass removed so far (kg)."""
         return float(self._level.outlet_status(self.index)["removed_mass"])
 
+    @property
+    def removed_moment(self) -> np.ndarray:
+        """Sum of m x over the particles removed so far (kg m): their centre of mass is
+        ``removed_moment / removed_mass``."""
+        return np.asarray(self._level.outlet_status(self.index)["removed_moment"], float)
+
     def history(self) -> OutletHistory:
         """(time s, cumulative mass kg, cumulative number) arrays; the discharge rate is the
         slope of mass over time (e.g. ``np.polyfit(time, mass, 1)[0]`` in kg/s)."""

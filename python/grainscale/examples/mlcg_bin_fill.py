@@ -169,7 +169,7 @@ def _seed_mean(runs: list[dict[str, Any]]) -> dict[str, Any]:
     out["wall_clock"] = float(np.mean([r["wall_clock"] for r in runs]))
     out["particles"] = int(np.mean([r["particles"] for r in runs]))
     if "mass_balance" in out:
-        out["mass_balance"] = [b for r in runs for b in r["mass_balance"]]
+        out["mass_balance"] = [r["mass_balance"] for r in runs]
     out.pop("pressure", None)
     return out
 
@@ -269,7 +269,7 @@ def report(case: BinCase, s: dict[str, Any]) -> str:
             "L1 sigma_zz over the window proper: " + ", ".join(f"{v:.3f}" for v in scatter)
         )
     for b in s["runs"].get("mlcg", {}).get("mass_balance", []):
-        lines.append(f"- mass balance, {describe_balance(b)}")
+        lines += [f"- mass balance, {line}" for line in describe_balance(b).split("\n")]
     lines.append("")
     return "\n".join(lines)
 

@@ -61,6 +61,7 @@ class SiloCase:
     friction: float = 0.5
     fill_mass: float = 0.45  # kg poured
     fill_rate: float = 2.0  # kg/s
+    pour_speed: float = 1.0  # m/s, downwards through the pour face
     settle: float = 0.25  # s after the pour
     discharge: float = 0.5  # s after the shutter opened
     transient: float = 0.1  # s after opening before the measuring window
@@ -71,7 +72,7 @@ class SiloCase:
     velocity_gain: float = 0.1
     stress_gain: float = 0.5
     boundary_velocity_gain: float = 1.0
-    top_up: float = 1.0
+    advance: float = 1.0
     seed: int = 1
 
     @property
@@ -142,7 +143,7 @@ def reference(case: SiloCase) -> tuple[gs.scaling.ParameterSet, int]:
         mass_rate=case.fill_rate,
         radius=size,
         material=glass,
-        velocity=(0, 0, -1.0),
+        velocity=(0, 0, -case.pour_speed),
         seed=case.seed,
         stop=case.fill_mass / case.fill_rate,
     )
@@ -181,8 +182,13 @@ class Run:
     wall_clock: float = 0.0
     history: list[tuple[float, float]] = dataclasses.field(default_factory=list)
     fields: dict[str, Any] = dataclasses.field(default_factory=dict)
-    mass_balance: list[dict[str, float]] = dataclasses.field(default_factory=list)
+    mass_balance: dict[str, Any] = dataclasses.field(default_factory=dict)
     clogged: bool = False
+    # Hierarchies: per interface, how the parent's outflow from the region follows the child's
+    # and how its velocity follows the child's (see follow()); the worst relative unaccounted
+    # mass of the books over the samples.
+    following: list[dict[str, float]] = dataclasses.field(default_factory=list)
+    max_unaccounted: float = 0.0
 
 
 def _rate(history: list[tuple[float, float]], start: float) -> tuple[float, bool]:
@@ -205,7 +211,8 @@ def _window_average(grid: dict[str, Any], sim: gs.Simulation) -> gs.fields.CellA
         lo=tuple(grid["origin"]),
         hi=tuple(np.asarray(grid["origin"]) + np.asarray(grid["dims"]) * np.asarray(grid["edge"])),
     )
-    return gs.fields.CellAverages(sim, box, float(np.max(grid["edge"])))
+    e = grid["edge"]
+    return gs.fields.CellAverages(sim, box, (float(e[0]), float(e[1]), float(e[2])))
 
 
 def run_single(case: SiloCase, h: float, grid: dict[str, Any] | None, vtk: Path | None) -> Run:
@@ -240,18 +247,20 @@ def run_single(case: SiloCase, h: float, grid: dict[str, Any] | None, vtk: Path 
 
 def build_hierarchy(case: SiloCase, levels: Sequence[float]) -> tuple[gs.Hierarchy, int]:
     params, shutter = reference(case)
-    spec = [gs.Level(cg=levels[0])]
-    if len(levels) == 3:
-        spec.append(gs.Level(cg=levels[1], region=middle_region(case)))
-    spec.append(gs.Level(cg=levels[-1], region=fine_region(case)))
     exchange = gs.Exchange(
         every=case.exchange_every,
-        cell_size=case.cell_size,
         velocity_gain=case.velocity_gain,
         stress_gain=case.stress_gain,
         boundary_velocity_gain=case.boundary_velocity_gain,
-        top_up=case.top_up,
+        advance=case.advance,
     )
+    # The case's cell size is the finest interface's; a middle level's takes the default
+    # (its parent's particles are larger).
+    finest = dataclasses.replace(exchange, cell_size=case.cell_size)
+    spec = [gs.Level(cg=levels[0])]
+    if len(levels) == 3:
+        spec.append(gs.Level(cg=levels[1], region=middle_region(case)))
+    spec.append(gs.Level(cg=levels[-1], region=fine_region(case), exchange=finest))
     hierarchy = gs.Hierarchy(base=params, levels=spec, exchange=exchange)
     return hierarchy, shutter
 
@@ -272,18 +281,71 @@ def run_mlcg(case: SiloCase, levels: Sequence[float], vtk: Path | None) -> Run:
     # The same estimator as for the single-level runs: snapshots of the finest level every
     # 0.01 s on the finest interface's cells.
     avg = _window_average(h.couplings[-1].grid, fine)
+    removed: list[tuple[float, list[float]]] = []  # every level's outlet, then what each paid
+    velocities: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in h.couplings]
     while h.time < case.end_time - 1e-9:
         h.run(until=min(h.time + 0.01, case.end_time))
-        run.history.append((h.time - case.open_time, float(outlet.removed_mass)))
+        t = h.time - case.open_time
+        run.history.append((t, float(outlet.removed_mass)))
         run.particles = max(run.particles, sum(s.num_particles for s in h.sims))
-        if h.time >= case.open_time + case.transient:
+        balance = h.mass_balance()
+        total = balance["initial"] + balance["inserted"]
+        run.max_unaccounted = max(run.max_unaccounted, abs(balance["unaccounted"]) / total)
+        levels = [float(s.outlets[0].removed_mass) for s in h.sims]
+        removed.append((t, levels + [i["paid"] for i in balance["interfaces"]]))
+        if t >= case.transient:
             avg.sample()
+            for k, c in enumerate(h.couplings):
+                velocities[k].append((c.parent_fields["velocity"], c.child_fields["velocity"]))
     run.wall_clock = time.perf_counter() - t0
     run.rate, run.clogged = _rate(run.history, case.transient)
     f = avg.finish()
     run.fields = {"solid_fraction": f["solid_fraction"], "velocity": f["velocity"]}
     run.mass_balance = h.mass_balance()
+    run.following = follow(h, removed, velocities, case.transient)
     return run
+
+
+def follow(
+    h: gs.Hierarchy,
+    removed: list[tuple[float, list[float]]],
+    velocities: list[list[tuple[np.ndarray, np.ndarray]]],
+    start: float,
+) -> list[dict[str, float]]:
+    """Per interface, over the measuring window: the parent's outflow from the region (its own
+    outlet's rate plus the rate at which it paid the child's discharge by removing particles)
+    against the child's (its outlet plus what it paid its own child), and the mean vertical
+    velocity of both levels over the region cells above the floor (time-averaged cell Favre
+    velocities, cells the child fills)."""
+    t = np.array([r[0] for r in removed])
+    m = np.array([r[1] for r in removed])
+    keep = t >= start
+    n = len(h.sims)
+    rates = [float(np.polyfit(t[keep], m[keep, k], 1)[0]) for k in range(m.shape[1])]
+    outflow = list(rates[:n])
+    for i, c in enumerate(h.couplings):
+        outflow[c.parent] += rates[n + i]
+    out = []
+    for i, c in enumerate(h.couplings):
+        g = c.grid
+        dims, origin, edge = np.array(g["dims"]), np.array(g["origin"]), np.array(g["edge"])
+        cells = np.arange(int(np.prod(dims)))
+        z = origin[2] + (cells // (dims[0] * dims[1]) + 0.5) * edge[2]
+        parent = np.mean([v[0] for v in velocities[i]], axis=0)
+        child = np.mean([v[1] for v in velocities[i]], axis=0)
+        above = (g["inside"] > 0) & (z > 0) & (np.linalg.norm(child, axis=1) > 0)
+        out.append(
+            {
+                "parent_outlet_rate": rates[c.parent],
+                "parent_paid_rate": rates[n + i],
+                "parent_outflow_rate": outflow[c.parent],
+                "child_outflow_rate": outflow[c.child],
+                "outflow_ratio": outflow[c.parent] / outflow[c.child] if outflow[c.child] else 0.0,
+                "parent_vz": float(parent[above, 2].mean()),
+                "child_vz": float(child[above, 2].mean()),
+            }
+        )
+    return out
 
 
 def field_errors(
@@ -375,6 +437,8 @@ def summarize(
             "wall_clock_per_simulated_second": r.wall_clock / (case.end_time),
             "history": r.history,
             "mass_balance": r.mass_balance,
+            "following": r.following,
+            "max_unaccounted": r.max_unaccounted,
             "fields": {k: np.asarray(v).tolist() for k, v in r.fields.items()},
         }
         if ref is not None and name != "resolved":
@@ -399,7 +463,8 @@ def report(case: SiloCase, s: dict[str, Any]) -> str:
         f"opened at t = {case.open_time:.3f} s; W = slope of the removed mass from "
         f"{case.transient:g} s to {case.discharge:g} s after opening",
         f"- fine region of the hierarchy: {case.region_width:g} D0 wide, from below the floor to "
-        f"{case.region_top:g} D0 above it; exchange cells {case.cell_size * 1e3:g} mm",
+        f"{case.region_top:g} D0 above it; exchange cells "
+        + (f"{case.cell_size * 1e3:g} mm" if case.cell_size else "by default"),
         "- L1 (relative, CASES.md section 0) of the time-averaged cell fields of the finest "
         "level against the resolved run, over the region's cells that the resolved run fills "
         "(solid fraction > 0.1): first over the region proper (the cells inside the transition "
@@ -422,10 +487,25 @@ def report(case: SiloCase, s: dict[str, Any]) -> str:
             f"{fe.get('solid_fraction', math.nan):.3f} | {fe.get('velocity', math.nan):.3f} |"
         )
     for name, r in s["runs"].items():
-        for b in r["mass_balance"]:
-            lines.append(f"- {name}, {describe_balance(b)}")
+        if r["mass_balance"]:
+            lines += [
+                f"- {name}, {line}" for line in describe_balance(r["mass_balance"]).split("\n")
+            ]
+            lines.append(f"- {name}, books closed to {r['max_unaccounted']:.1e} (relative, worst)")
+        lines += [f"- {name}, {describe_following(f)}" for f in r.get("following", [])]
     lines.append("")
     return "\n".join(lines)
+
+
+def describe_following(f: dict[str, float]) -> str:
+    """One line of follow(): how a parent level follows its child."""
+    return (
+        f"parent outflow {f['parent_outflow_rate'] * 1e3:.1f} g/s (outlet "
+        f"{f['parent_outlet_rate'] * 1e3:.1f} + paid {f['parent_paid_rate'] * 1e3:.1f}) against "
+        f"the child's {f['child_outflow_rate'] * 1e3:.1f} g/s: ratio {f['outflow_ratio']:.3f}; "
+        f"mean v_z above the floor {f['parent_vz'] * 1e3:.1f} mm/s (parent) and "
+        f"{f['child_vz'] * 1e3:.1f} mm/s (child)"
+    )
 
 
 def plot(path: Path, results: dict[str, Run]) -> None:
