@@ -25,8 +25,11 @@ import numpy as np
 from . import _core
 
 # The stress controller's output is clipped to [0, PRESSURE_CAP x the parent's stress]: it never
-# pulls, and a bounded push cannot blow a cell apart while its integral recovers.
-PRESSURE_CAP = 10.0
+# pulls, and the push, which stands for the contacts with the material beyond the face, cannot
+# exceed what that material carries by much. Where the child's material yields (flows) it never
+# reaches the target, and a larger cap let the integral wind the push up to 5 x the parent's
+# stress and drive the flow ever faster (docs/studies/mlcg_jam/NOTES.md).
+PRESSURE_CAP = 2.0
 # Without a coarse motion to follow, the push of a face stops for particles moving inwards faster
 # than this fraction of the free-fall speed over a fine diameter.
 REST_SPEED_FRACTION = 0.1

@@ -235,34 +235,40 @@ def test_interface_ledger_debits_are_paid_by_extraction():
     that face's shell, nearest the face first, and fed + credited - debited = inserted -
     extracted + pending holds exactly (no advance here, so that pending is what the face owes)."""
     h = two_level(advance=0.0)
-    h.run(intervals=200)
+    h.run(intervals=300)
     c = h.couplings[0]
-    itf, child = c.interface, h.level(1)
-    # A side face (normal +x) at the floor, where the fine bed lies.
-    g = c.grid
-    sides = np.flatnonzero(g["face_normal"][:, 0] > 0.5)
-    face = int(sides[np.argmin(g["face_centre"][sides, 2] + 1e-6 * g["face_centre"][sides, 1])])
-    n = len(c.grid["face_cell"])
-    zero = {k: np.zeros(n) for k in ("mass", "count", "inertia")}
-    zero.update(momentum=np.zeros((n, 3)), spin=np.zeros((n, 3)))
-    debit = 2.5e-4
-    out = dict(zero, mass=np.where(np.arange(n) == face, debit, 0.0))
-    before = {k: v.copy() for k, v in itf.inserter_status().items()}
+    itf, child, g = c.interface, h.level(1), c.grid
     with child.particles(writable=False) as p:
         ids_before, x_before = np.asarray(p.id).copy(), np.asarray(p.position).copy()
         m_before = np.asarray(p.mass).copy()
+
+    def shell(f: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per particle: inside distance from face f, on its rectangle, in its shell (r_min
+        outside to 4 r_max inside)."""
+        a, centre, edge = int(g["face_axis"][f]), g["face_centre"][f], np.asarray(g["edge"])
+        s_in = (x_before - centre) @ g["face_normal"][f]
+        others = [b for b in range(3) if b != a]
+        on = np.all(np.abs(x_before[:, others] - centre[others]) <= 0.5 * edge[others], axis=1)
+        return s_in, on, on & (s_in >= -0.95e-3) & (s_in <= 4 * 1.05e-3)
+
+    # A side face whose shell holds the most fine mass (normal along x).
+    sides = np.flatnonzero(np.abs(g["face_normal"][:, 0]) > 0.5)
+    face = int(sides[np.argmax([m_before[shell(f)[2]].sum() for f in sides])])
+    s_in, on_face, in_shell = shell(face)
+    available = float(m_before[in_shell].sum())
+    assert available > 1.7e-4  # 0.6 of it is beyond the dead band
+    n = len(g["face_cell"])
+    zero = {k: np.zeros(n) for k in ("mass", "count", "inertia")}
+    zero.update(momentum=np.zeros((n, 3)), spin=np.zeros((n, 3)))
+    before = {k: v.copy() for k, v in itf.inserter_status().items()}
+    debit = 0.6 * available + max(before["pending_mass"][face], 0.0)
+    out = dict(zero, mass=np.where(np.arange(n) == face, debit, 0.0))
     itf.book({"inward": zero, "outward": out}, np.zeros((n, 3)))
     removed = itf.extract(child._level)
     st = itf.inserter_status()
     assert st["debited_mass"][face] - before["debited_mass"][face] == pytest.approx(debit)
     # Scheduled particles are cancelled first; beyond the dead band (one parcel) the whole debt
-    # is paid from the face's shell (r_min outside to 4 r_max inside), to within one fine
-    # particle.
-    centre, edge = g["face_centre"][face], np.asarray(g["edge"])
-    s_in = x_before[:, 0] - centre[0]
-    on_face = np.all(np.abs(x_before[:, 1:] - centre[1:]) <= 0.5 * edge[1:], axis=1)
-    in_shell = on_face & (s_in >= -0.95e-3) & (s_in <= 4 * 1.05e-3)
-    available = float(m_before[in_shell].sum())
+    # is paid from the face's shell, to within one fine particle.
     owed = debit - before["pending_mass"][face]
     assert owed > GLASS.density * 4 / 3 * np.pi * (2.1e-3) ** 3  # beyond the dead band
     assert owed < available  # paid in full here

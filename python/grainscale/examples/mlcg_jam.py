@@ -45,7 +45,7 @@ JAM = silo.SiloCase(
     fill_rate=0.6,
     pour_speed=2.0,
     settle=0.2,
-    discharge=0.4,
+    discharge=0.8,
     transient=0.08,
 )
 QUICK = dataclasses.replace(JAM, fill_mass=0.09, settle=0.15, discharge=0.3, transient=0.06)
