@@ -11,6 +11,8 @@ class each, set once per exchange interval from the cell averages of both levels
 * :class:`StressBoundary` (coarse -> fine): a PI controller per interface face pushes the child's
   particles in a layer at the face so that the child's normal stress in the boundary cell
   follows the parent's.
+* :class:`Advance` (coarse -> fine): below a dense parent bed the child may place particles ahead
+  of the flux, which the flux then repays (Exchange.advance).
 
 Each holds its last output (re-applied after a restart) and its state for checkpoints.
 """
@@ -217,6 +219,52 @@ def rest_speed(gravity: float, fine_diameter: float) -> float:
     return REST_SPEED_FRACTION * math.sqrt(gravity * fine_diameter)
 
 
+class Advance:
+    """Exchange.advance: per face gravity points through into the region, below a dense parent
+    bed (its cell's solid fraction at least ``min_fraction``), the child may place up to
+    advance x (phi - phi_child) rho V per interval ahead of the flux, phi the smaller of the
+    parent's solid fraction there and the child's one cell further in (its own packing away
+    from the face)."""
+
+    def __init__(self, fraction: float, min_fraction: float, grid: dict[str, Any]) -> None:
+        self.fraction = fraction
+        self.min_fraction = min_fraction
+        n = len(grid["face_cell"])
+        self.budget = np.zeros(n)  # kg per face, for the next insertion
+        self.downward = np.zeros(n, bool)  # set by the hierarchy from gravity
+        self.density = 0.0  # kg/m^3, set by the hierarchy
+        # Per face, the cell next to its cell along the inward normal (its own cell at the
+        # grid's edge).
+        dims = np.asarray(grid["dims"])
+        cell = grid["face_cell"].astype(int)
+        ijk = np.stack([cell % dims[0], (cell // dims[0]) % dims[1], cell // (dims[0] * dims[1])])
+        step = np.rint(grid["face_normal"]).astype(int).T
+        ijk = np.clip(ijk + step, 0, (dims - 1)[:, None])
+        self.inner_cells = ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])
+
+    @property
+    def active(self) -> bool:
+        return self.fraction > 0
+
+    def update(
+        self, grid: dict[str, Any], parent: dict[str, Any], child: dict[str, Any], interval: float
+    ) -> None:
+        cells = grid["face_cell"].astype(int)
+        phi_p, phi_c = parent["solid_fraction"][cells], child["solid_fraction"][cells]
+        target = np.minimum(phi_p, child["solid_fraction"][self.inner_cells])
+        dense = self.downward & (phi_p >= self.min_fraction)
+        volume = float(np.prod(grid["edge"]))
+        room = self.fraction * np.maximum(target - phi_c, 0.0) * self.density * volume
+        self.budget = np.where(dense, room, 0.0)
+
+    def state(self) -> dict[str, Any]:
+        return {"advance": self.budget.tolist()}
+
+    def load(self, state: dict[str, Any]) -> None:
+        if "advance" in state:
+            self.budget = np.asarray(state["advance"], float)
+
+
 class Coupling:
     """One parent-child pair of a hierarchy: the C++ interface, its controllers and its books.
 
@@ -240,6 +288,7 @@ class Coupling:
         )
         self.boundary_velocity = BoundaryVelocity(exchange.boundary_velocity_gain, n_cells)
         self.stress: StressBoundary | None = None
+        self.advance = Advance(exchange.advance, exchange.advance_min_fraction, self.grid)
         self.parent_coupling = -1
         self.child_coupling = -1
         self.region_outlet = -1
@@ -247,19 +296,6 @@ class Coupling:
         # Per face, the parent's Favre velocity in the face's cell over the last interval: given
         # to what is placed at a face without inflow.
         self.beyond = np.zeros((len(self.grid["face_cell"]), 3))
-        # Per face, what the child may place ahead of the flux next (Exchange.advance).
-        self.advance = np.zeros(len(self.grid["face_cell"]))
-        self.downward = np.zeros(len(self.grid["face_cell"]), bool)  # gravity points inwards
-        # Per face, the cell next to its cell along the inward normal (its own cell at the
-        # grid's edge).
-        g = self.grid
-        dims = np.asarray(g["dims"])
-        cell = g["face_cell"].astype(int)
-        ijk = np.stack([cell % dims[0], (cell // dims[0]) % dims[1], cell // (dims[0] * dims[1])])
-        step = np.rint(g["face_normal"]).astype(int).T
-        ijk = np.clip(ijk + step, 0, (dims - 1)[:, None])
-        self.inner_cells = ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])
-        self.density = 0.0
         self.parent_fields: dict[str, Any] | None = None
         self.child_fields: dict[str, Any] | None = None
         self.parent_discharged = 0.0
@@ -281,7 +317,11 @@ class Coupling:
         return self.child_removed - self.parent_discharged - self.parent_lost - self.paid
 
     def controllers(self) -> list[Any]:
-        return [c for c in (self.feedback, self.boundary_velocity, self.stress) if c is not None]
+        return [
+            c
+            for c in (self.feedback, self.boundary_velocity, self.stress, self.advance)
+            if c is not None
+        ]
 
     def apply_controls(self, parent: _core.Level, child: _core.Level) -> None:
         if self.feedback.active:
@@ -297,19 +337,7 @@ class Coupling:
         for controller in self.controllers():
             if controller.active:
                 controller.update(self.grid, pf, cf, interval)
-        cells = self.grid["face_cell"].astype(int)
-        self.beyond = np.asarray(pf["velocity"])[cells]
-        ex = self.exchange
-        if ex.advance > 0:
-            # Up to the child's own packing one cell further in (what its bed holds away from
-            # the face), no denser than the parent's bed beyond.
-            inner = self.inner_cells
-            phi_p, phi_c = pf["solid_fraction"][cells], cf["solid_fraction"][cells]
-            target = np.minimum(phi_p, cf["solid_fraction"][inner])
-            dense = self.downward & (phi_p >= ex.advance_min_fraction)
-            volume = float(np.prod(self.grid["edge"]))
-            room = ex.advance * np.maximum(target - phi_c, 0.0) * self.density * volume
-            self.advance = np.where(dense, room, 0.0)
+        self.beyond = np.asarray(pf["velocity"])[self.grid["face_cell"].astype(int)]
 
     def mass_excess(self) -> np.ndarray:
         """Per grid cell, how much more mass (kg) the parent held than the child over the last
@@ -350,7 +378,6 @@ class Coupling:
             ],
             left_booked=self.left_booked.tolist(),
             beyond=self.beyond.tolist(),
-            advance=self.advance.tolist(),
         )
         return out
 
@@ -372,4 +399,3 @@ class Coupling:
             self.discharge_point = np.asarray(ledger[8:11])
             self.left_booked = np.asarray(state["left_booked"], float)
             self.beyond = np.asarray(state["beyond"], float).reshape(-1, 3)
-            self.advance = np.asarray(state["advance"], float)

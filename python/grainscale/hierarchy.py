@@ -277,8 +277,8 @@ class Hierarchy:
         else:
             itf = self._default_interface(interface, CELL_PARENT_DIAMETERS * d_parent, lowest, k)
         c = Coupling(parent, k, itf, ex)
-        c.downward = c.grid["face_normal"] @ np.asarray(self.base.gravity, float) > 0
-        c.density = float(self.material.density)
+        c.advance.downward = c.grid["face_normal"] @ np.asarray(self.base.gravity, float) > 0
+        c.advance.density = float(self.material.density)
         layer, fade = ex.layer * d_child, ex.fade * d_child
         c.parent_coupling = int(psim._level.add_coupling(itf, layer, fade))
         c.child_coupling = int(csim._level.add_coupling(itf, layer, fade))
@@ -463,7 +463,7 @@ class Hierarchy:
                     c.interface.book(c.flux, c.beyond)
                     c.flux = None
                     c.interface.extract(level)
-                    c.interface.allow_advance(c.advance)
+                    c.interface.allow_advance(c.advance.budget)
                     c.interface.insert(level)
             touching = [c for c in self.couplings if c.parent == k or c.child == k]
             samples = min(self.exchange.samples, self.steps[k])
