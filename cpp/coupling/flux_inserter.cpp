@@ -27,6 +27,12 @@ FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
   // From r_min outside the face: centres reach the face (see the header).
   const Real out = radius.min_radius();
   shell_ = Region::parallelepiped(corner - out * face.normal, e1, e2, (depth + out) * face.normal);
+  // Placement: the same depth, the face rectangle widened by the largest fine radius on every
+  // side, so that a sphere whose centre is on the face may straddle its edges (see the header).
+  const Real r = radius.max_radius();
+  const Vec3 w1 = e1.normalized() * r, w2 = e2.normalized() * r;
+  placing_ = Region::parallelepiped(corner - out * face.normal - w1 - w2, e1 + 2 * w1, e2 + 2 * w2,
+                                    (depth + out) * face.normal);
   next_ = radius_.sample(rng_);
 }
 
@@ -86,7 +92,7 @@ void FluxInserter::settle() {
 std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
                                 std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
-  place_pending(pending_, shell_, 50, rng_, grid, walls, position, radius);
+  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius);
   for (std::size_t k = before; k < radius.size(); ++k) inserted_mass_ += mass_of(radius[k]);
   if (advance_budget_ > 0 && pending_.empty()) {
     // Ahead of the flux, up to the budget, by the same placement rule; what finds no room
@@ -99,7 +105,7 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
       extra.push_back(r);
     }
     const std::size_t start = radius.size();
-    place_pending(extra, shell_, 50, rng_, grid, walls, position, radius);
+    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius);
     for (std::size_t k = start; k < radius.size(); ++k) {
       inserted_mass_ += mass_of(radius[k]);
       advanced_mass_ += mass_of(radius[k]);

@@ -30,6 +30,10 @@
 // a layer r thick). Particles are placed with the face's mass-weighted inflow velocity (or, in
 // an interval without inflow, the parent's velocity beyond the face) and the inflow spin scaled
 // by the size ratio (w R kept: the surface speed of a spinning grain); what finds no room waits.
+// A placed sphere needs its centre over the face rectangle, not the whole sphere inside it: a face
+// is a few fine diameters across, and whole spheres would leave the rim unusable (half the area of
+// a 7.5 mm face for 2 mm grains), so that a dense inflow, a pour or a sinking bed, could not be
+// carried: the fine bed then formed loose and short of the parent's mass (jam study, stop 23).
 #pragma once
 
 #include <cstdint>
@@ -69,6 +73,7 @@ class FluxInserter {
   void extracted(Real mass);
 
   const Region& shell() const { return shell_; }
+  const Region& placing_region() const { return placing_; }
   Real max_radius() const { return radius_.max_radius(); }
   // Places scheduled particles (in order), then, if none waits, up to the advance budget; placed
   // ones are appended. Returns how many.
@@ -107,7 +112,8 @@ class FluxInserter {
   std::int32_t material_ = 0;
   Real spin_scale_ = 1;
   Real deadband_ = 0;
-  Region shell_ = Region::box(Vec3::Zero(), Vec3::Ones());
+  Region shell_ = Region::box(Vec3::Zero(), Vec3::Ones());    // extraction: centres on the face
+  Region placing_ = Region::box(Vec3::Zero(), Vec3::Ones());  // placement: spheres may straddle
   Rng rng_;
   Real owed_ = 0;  // signed unscheduled balance (less than next_'s mass when positive)
   Real next_ = 0;  // radius of the next particle to schedule

@@ -280,7 +280,7 @@ std::int64_t Level::insert_flux(std::vector<FluxInserter>& inserters) {
   for (const FluxInserter& f : inserters) {
     if (!f.waiting()) continue;
     Vec3 a, b;
-    f.shell().bounds(a, b);
+    f.placing_region().bounds(a, b);
     lo = lo.cwiseMin(a);
     hi = hi.cwiseMax(b);
     max_new = std::max(max_new, f.max_radius());

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from . import scaling
-from ._validate import positive
+from ._validate import non_negative, positive
 from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
 from .insert import Pack, Stream, _core_region
@@ -94,9 +94,11 @@ class Exchange:
     advance_min_fraction: float = 0.49
 
     def __post_init__(self) -> None:
-        for name in ("cell_size", "every", "stress_integral"):
+        for name in ("cell_size", "every"):
             if getattr(self, name) is not None:
                 positive("Exchange", name, getattr(self, name))
+        if self.stress_integral is not None:  # 0 with stress_gain 0: no stress condition
+            non_negative("Exchange", "stress_integral", self.stress_integral)
         if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
             raise ValueError(f"Exchange.samples must be a positive integer, got {self.samples!r}")
         for name in (

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "expect.hpp"
 #include "geometry/triangle_bins.hpp"
 #include "geometry/wall.hpp"
 #include "insert/wall_clearance.hpp"
@@ -27,14 +28,8 @@ using gs::Vec3;
 
 namespace {
 
-int g_failures = 0, g_checks = 0;
-
-void expect(bool ok, const std::string& what, int line) {
-  ++g_checks;
-  if (ok) return;
-  if (++g_failures <= 20) std::printf("FAIL test_wall_clearance.cpp:%d: %s\n", line, what.c_str());
-}
-#define EXPECT(cond, what) expect((cond), (what), __LINE__)
+using test_support::g_checks;
+using test_support::g_failures;
 
 std::mt19937_64 g_rng(12345);
 Real uniform(Real a, Real b) { return std::uniform_real_distribution<Real>(a, b)(g_rng); }

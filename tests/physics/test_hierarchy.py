@@ -162,6 +162,10 @@ def test_invalid_hierarchies_are_refused():
         gs.Exchange(boundary_velocity_gain=1.5)
     with pytest.raises(ValueError, match="Exchange.max_lag must be non-negative and finite"):
         gs.Exchange(max_lag=-1)
+    with pytest.raises(ValueError, match="Exchange.stress_integral must be non-negative"):
+        gs.Exchange(stress_integral=-1.0)
+    # Both stress gains zero switch the stress condition off, as documented.
+    assert not two_level(stress_gain=0.0, stress_integral=0.0).couplings[0].stress.active
     with pytest.raises(TypeError, match="top_up"):
         gs.Exchange(top_up=1.0)  # type: ignore[call-arg]
     # A finer level starts empty: a parent that holds particles in its region is refused.
@@ -199,7 +203,9 @@ def test_pouring_into_the_region_conserves_mass_exactly():
     (i,) = b["interfaces"]
     assert i["carried_in"] > 0.004  # kg (0.08 kg/s for ~0.07 s after the fall)
     assert i["carried_out"] > 0  # the heap spreads out through the side faces
-    assert i["inserted"] > 0.9 * i["carried_in"]
+    # The insertion keeps up with what is owed (what the coarse level carried out again before
+    # it was placed cancelled it: compare with the net).
+    assert i["inserted"] > 0.9 * (i["carried_in"] - i["carried_out"] + i["returned"])
     assert i["extracted"] > 0 and i["extracted"] < i["carried_out"] + i["returned"]
     assert abs(i["pending"]) < 0.1 * i["carried_in"]
     assert b["discharged"] == 0 and b["lost"] == 0
