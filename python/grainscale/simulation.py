@@ -6,7 +6,6 @@ steps in C++ with the GIL released, so Ctrl-C is honoured between chunks.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import sys
@@ -20,13 +19,13 @@ import numpy as np
 from . import _core, parallel
 from ._validate import positive, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
-from .geometry import Box, Cylinder, Mesh, Plane, Rectangle, Servo
+from .geometry import Box, Cylinder, Mesh, Plane, Rectangle
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
-
-_VECTOR_FIELDS = ("position", "velocity", "angular_velocity", "force", "torque")
-_SCALAR_FIELDS = ("radius", "mass", "id", "material")
-_WRITABLE_FIELDS = ("position", "velocity", "angular_velocity")
+from .particle_view import WRITABLE_FIELDS, ParticleView
+from .sim_checkpoint import CheckpointMethods
+from .sim_ranks import RankMethods
+from .sim_walls import WallMethods
 
 
 class Output(Protocol):
@@ -37,53 +36,7 @@ class Output(Protocol):
     def write(self, sim: Simulation) -> Any: ...
 
 
-class ParticleView:
-    """Zero-copy numpy views of the owned particles, valid only inside ``Simulation.particles()``.
-
-    Attributes (all SI): position, velocity, angular_velocity (N, 3) — writable when the view
-    is; force, torque (N, 3) of the last evaluation (force includes gravity); radius, mass (N,);
-    id (N,) int64 global ids; material (N,) int32 material index. Particle order may change
-    between runs (spatial sorting): identify particles by ``id``.
-    """
-
-    def __init__(self, level: _core.Level, writable: bool) -> None:
-        self._level = level
-        self._writable = writable
-        self._arrays: dict[str, np.ndarray] = {}
-        self._valid = True
-
-    def _get(self, name: str) -> np.ndarray:
-        if not self._valid:
-            raise RuntimeError(
-                f"particle array '{name}' used outside its 'with sim.particles()' block"
-            )
-        a = self._arrays.get(name)
-        if a is None:
-            a = self._level.view(name)
-            if not (self._writable and name in _WRITABLE_FIELDS):
-                a.flags.writeable = False
-            self._arrays[name] = a
-        return a
-
-    def _close(self) -> None:
-        self._valid = False
-        self._arrays.clear()
-
-    def __len__(self) -> int:
-        return int(self._level.num_owned)
-
-    position = property(lambda self: self._get("position"))
-    velocity = property(lambda self: self._get("velocity"))
-    angular_velocity = property(lambda self: self._get("angular_velocity"))
-    force = property(lambda self: self._get("force"))
-    torque = property(lambda self: self._get("torque"))
-    radius = property(lambda self: self._get("radius"))
-    mass = property(lambda self: self._get("mass"))
-    id = property(lambda self: self._get("id"))
-    material = property(lambda self: self._get("material"))
-
-
-class Simulation:
+class Simulation(WallMethods, RankMethods, CheckpointMethods):
     """A DEM simulation of spheres in a box, with walls and one contact law.
 
     Args:
@@ -311,137 +264,6 @@ class Simulation:
         )
         return np.arange(first, first + n, dtype=np.int64)
 
-    def add_wall(
-        self, wall: Plane | Rectangle | Cylinder | Mesh, servo: Servo | None = None
-    ) -> int:
-        """Add a wall; returns its index (for wall_force, wall_torque, set_wall_motion).
-
-        Args:
-            wall: Plane, Rectangle, Cylinder or Mesh.
-            servo: optional force/stress control of the wall's translation.
-        """
-        mat = -1 if wall.material is None else self.material_index(wall.material)
-        lv = self._level
-        if servo is not None:  # validate before the wall exists
-            servo.force_for(wall)
-            servo.direction_for(wall)
-        if isinstance(wall, Plane):
-            k = lv.add_plane_wall(wall.point, wall.normal, wall.velocity, mat)
-        elif isinstance(wall, Rectangle):
-            k = lv.add_rectangle_wall(wall.corner, wall.edge1, wall.edge2, wall.velocity, mat)
-        elif isinstance(wall, Cylinder):
-            length = 0.0 if wall.length is None else wall.length
-            k = lv.add_cylinder_wall(
-                wall.point, wall.axis, wall.radius, length, wall.inside, wall.velocity, mat
-            )
-            if any(wall.angular_velocity):
-                lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, wall.point)
-                self._wall_spin[int(k)] = wall.angular_velocity
-        elif isinstance(wall, Mesh):
-            k = lv.add_mesh_wall(wall.vertices, wall.triangles, wall.origin, wall.velocity, mat)
-            if any(wall.angular_velocity):
-                lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, wall.origin)
-                self._wall_spin[int(k)] = wall.angular_velocity
-        else:
-            raise ValueError(
-                f"add_wall.wall must be a Plane, Rectangle, Cylinder or Mesh, got {wall!r}"
-            )
-        self._walls.append(wall)
-        if servo is not None:
-            self.set_wall_servo(int(k), servo)
-        return int(k)
-
-    def set_wall_motion(
-        self,
-        index: int,
-        velocity: Sequence[float] | None = None,
-        angular_velocity: Sequence[float] | None = None,
-        origin: Sequence[float] | None = None,
-    ) -> None:
-        """Change a wall's prescribed motion: translation velocity (m/s) and rotation
-        (rad/s) about ``origin`` (m; also the torque reference). None keeps a value."""
-        lv, k = self._level, self._wall_index(index)
-        lv.set_wall_motion(
-            k,
-            vector3(
-                "set_wall_motion", "velocity", lv.wall_velocity(k) if velocity is None else velocity
-            ),
-            vector3(
-                "set_wall_motion",
-                "angular_velocity",
-                self._wall_spin.get(k, (0.0, 0.0, 0.0))
-                if angular_velocity is None
-                else angular_velocity,
-            ),
-            vector3("set_wall_motion", "origin", lv.wall_origin(k) if origin is None else origin),
-        )
-        if angular_velocity is not None:
-            self._wall_spin[k] = vector3("set_wall_motion", "angular_velocity", angular_velocity)
-
-    def set_wall_servo(self, index: int, servo: Servo | None) -> None:
-        """Put a wall under servo control (None switches it off)."""
-        k = self._wall_index(index)
-        if servo is None:
-            self._level.set_wall_servo(k, False, (0.0, 0.0, 1.0), 0.0, 0.0, 0.0)
-            return
-        wall = self._walls[k]
-        self._level.set_wall_servo(
-            k,
-            True,
-            servo.direction_for(wall),
-            servo.force_for(wall),
-            servo.gain,
-            servo.max_speed,
-            servo.integral_gain,
-        )
-
-    def wall_servo_integral(self, index: int) -> float:
-        """The integrated force error (N s) of wall ``index``'s PI servo (0 without one)."""
-        return float(self._level.wall_servo_integral(self._wall_index(index)))
-
-    def wall_velocity(self, index: int) -> np.ndarray:
-        """Current translation velocity (m/s) of wall ``index`` (servo walls change it)."""
-        return np.array(self._level.wall_velocity(self._wall_index(index)))
-
-    def mesh_walls(self) -> list[dict[str, Any]]:
-        """Current geometry of the mesh walls: index, vertices, triangles, moving (for output)."""
-        out = []
-        for k, wall in enumerate(self._walls):
-            if isinstance(wall, Mesh):
-                moving = bool(
-                    np.any(self._level.wall_velocity(k))
-                    or any(self._wall_spin.get(k, wall.angular_velocity))
-                )
-                out.append(
-                    {
-                        "index": k,
-                        "vertices": np.asarray(self._level.wall_vertices(k)),
-                        "triangles": wall.triangles,
-                        "moving": moving,
-                    }
-                )
-        return out
-
-    def wall_force(self, index: int) -> np.ndarray:
-        """Force (N) exerted by the particles on wall ``index`` at the last step."""
-        return np.array(self._level.wall_force(self._wall_index(index)))
-
-    def wall_torque(self, index: int) -> np.ndarray:
-        """Torque (N m) exerted by the particles on wall ``index`` about its origin (plane point,
-        rectangle corner, cylinder axis point, mesh origin, or the origin set by
-        set_wall_motion)."""
-        return np.array(self._level.wall_torque(self._wall_index(index)))
-
-    def wall_position(self, index: int) -> np.ndarray:
-        """Current reference point (m) of wall ``index``: plane point, rectangle corner, point on
-        a cylinder's axis (moves with the wall)."""
-        return np.array(self._level.wall_point(self._wall_index(index)))
-
-    def _wall_index(self, index: int) -> int:
-        if not 0 <= index < len(self._walls):
-            raise ValueError(f"wall index must be in [0, {len(self._walls)}), got {index}")
-        return index
-
     def output(self, writer: Output) -> None:
         """Register an output operation (e.g. ``grainscale.io.VTK``), called during run()."""
         if not hasattr(writer, "next_step") or not hasattr(writer, "write"):
@@ -530,7 +352,7 @@ class Simulation:
         view = ParticleView(self._level, writable)
         before = None
         if writable:
-            before = {f: self._level.view(f).copy() for f in _WRITABLE_FIELDS}
+            before = {f: self._level.view(f).copy() for f in WRITABLE_FIELDS}
         try:
             yield view
         finally:
@@ -545,71 +367,6 @@ class Simulation:
                     )
                 ):
                     self._level.mark_velocities_changed()
-
-    def gather(
-        self, fields: Sequence[str] = ("position", "velocity", "angular_velocity", "radius", "id")
-    ) -> dict[str, np.ndarray]:
-        """Collective: copies of the particle arrays of every rank, sorted by id, on every rank.
-
-        Args:
-            fields: names of ``particles()`` arrays (``id`` is always included).
-        """
-        names = list(dict.fromkeys([*fields, "id"]))
-        for name in names:
-            if name not in _VECTOR_FIELDS + _SCALAR_FIELDS:
-                raise ValueError(
-                    f"Simulation.gather.fields must name particle arrays "
-                    f"{_VECTOR_FIELDS + _SCALAR_FIELDS}, got {name!r}"
-                )
-        with self.particles(writable=False) as p:
-            local = {name: np.array(getattr(p, name)) for name in names}
-        if self._comm is not None:
-            parts = self._comm.allgather(local)
-            local = {name: np.concatenate([q[name] for q in parts]) for name in names}
-        order = np.argsort(local["id"], kind="stable")
-        return {name: a[order] for name, a in local.items()}
-
-    def sum_over_ranks(self, value: Any) -> Any:
-        """Collective: ``value`` (a number or numpy array, e.g. a sum over this rank's
-        ``particles()``) summed over the ranks, on every rank; ``value`` itself when serial."""
-        if self._comm is None:
-            return value
-        parts = self._comm.allgather(value)
-        total = parts[0]
-        for part in parts[1:]:  # in rank order: every rank gets the same bits
-            total = total + part
-        return total
-
-    def decomposition(self) -> dict[str, Any]:
-        """Collective: processor grid, this rank's grid coordinates, the cut positions per axis
-        (m) and the particle count of every rank."""
-        d = dict(self._level.decomposition())
-        d["counts"] = list(self._level.rank_counts())
-        return d
-
-    def balance(self, every: int | None = None, threshold: float = 1.05) -> dict[str, float]:
-        """Collective: move the subdomain cuts so that every rank holds the same estimated work
-        (along each split axis; the particles move at the next step). A particle's work is
-        1 + 0.8 per neighbour-list entry + 2 per touching contact: deterministic, so balanced
-        runs stay reproducible.
-
-        Args:
-            every: also rebalance automatically at neighbour-list builds at least this many
-                steps apart, when the imbalance exceeds ``threshold`` (0 switches it off;
-                parallel runs start with every = 500, threshold = 1.05).
-            threshold: largest rank's work / mean work that automatic balancing accepts.
-
-        Returns: ``{"before": ..., "after": ...}``, the imbalance (largest rank's work / mean).
-        """
-        if every is not None:
-            if isinstance(every, bool) or int(every) != every or every < 0:
-                raise ValueError(
-                    f"Simulation.balance.every must be a non-negative integer, got {every!r}"
-                )
-            self._level.set_auto_balance(int(every), float(threshold))
-        self._resolve_defaults()
-        before, after = self._level.balance()
-        return {"before": float(before), "after": float(after)}
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy (J)."""
@@ -660,45 +417,6 @@ class Simulation:
             "particles": self.num_particles,
             "lost": self.lost_particles,
         }
-
-    # ----------------------------------------------------------------- checkpoints
-    def checkpoint(self, path: str | os.PathLike[str]) -> None:
-        """Save the state to an HDF5 checkpoint (see grainscale.io.checkpoint)."""
-        from .io import checkpoint
-
-        checkpoint.save(self, path)
-
-    def restart(self, path: str | os.PathLike[str]) -> None:
-        """Continue from a checkpoint written by a simulation with the same set-up."""
-        from .io import checkpoint
-
-        checkpoint.load(self, path)
-
-    def _checkpoint_extra(self) -> dict[str, Any]:
-        return {
-            "time_step": self._time_step,
-            "skin_fixed": self._skin_fixed,
-            "wall_spin": {str(k): list(v) for k, v in self._wall_spin.items()},
-            "materials": [dataclasses.asdict(m) for m in self._materials],
-        }
-
-    def _restore_checkpoint_extra(self, extra: dict[str, Any]) -> None:
-        # Materials the set-up has not registered yet (those only particles use) are registered
-        # in the saved order; a different order is a different set-up.
-        for k, fields_ in enumerate(extra.get("materials", [])):
-            material = Material(**fields_)
-            if k < len(self._materials) and self._materials[k] != material:
-                raise ValueError(
-                    f"checkpoint material {k} is {material}, this simulation has "
-                    f"{self._materials[k]}: the set-up differs"
-                )
-            self.material_index(material)
-        self._push_interactions()
-        if extra.get("time_step") is not None:
-            self._time_step = float(extra["time_step"])
-            self._level.set_time_step(self._time_step, self._force_time_step)
-        self._skin_fixed = bool(extra.get("skin_fixed", True))
-        self._wall_spin = {int(k): tuple(v) for k, v in extra.get("wall_spin", {}).items()}
 
     # ----------------------------------------------------------------- running
     def _push_interactions(self) -> None:

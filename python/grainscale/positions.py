@@ -1,0 +1,154 @@
+"""Set-up helpers that only return particle positions (m), for ``Simulation.add_particles``:
+:func:`lattice` (a simple cubic lattice in a box) and :func:`random_in_box` (random
+non-overlapping centres). Also available as ``grainscale.insert.lattice`` and
+``grainscale.insert.random_in_box``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .geometry import Box
+
+__all__ = ["lattice", "random_in_box"]
+
+
+def lattice(
+    region: Box,
+    spacing: float,
+    count: int | None = None,
+    jitter: float = 0.0,
+    seed: int = 0,
+    plane_z: float | None = None,
+) -> np.ndarray:
+    """Simple-cubic lattice sites inside ``region``, filled bottom-up (z, then y, then x).
+
+    Args:
+        region: box to fill; the first site is half a spacing inside each lower face.
+        spacing: lattice spacing (m).
+        count: number of sites (None: all that fit).
+        jitter: uniform random displacement in [-jitter, jitter] added to x and y (m).
+        seed: random seed for the jitter.
+        plane_z: 2-D mode (``sim.plane_z``): a square lattice in the region's x-y rectangle,
+            filled by rows (y, then x), with every z equal to ``plane_z``.
+
+    Returns:
+        (count, 3) positions.
+    """
+    if not spacing > 0:
+        raise ValueError(f"lattice.spacing must be positive (m), got {spacing!r}")
+    if not 0 <= jitter < 0.5 * spacing:
+        raise ValueError(f"lattice.jitter must be in [0, spacing/2), got {jitter!r}")
+    n = np.floor(region.length / spacing + 1e-9).astype(int)
+    if plane_z is not None:
+        _check_plane("lattice", region, plane_z)
+        n[2] = 1
+    capacity = int(np.prod(n))
+    if count is None:
+        count = capacity
+    if count < 0 or count > capacity:
+        raise ValueError(
+            f"lattice.count must be in [0, {capacity}] for this region and spacing, got {count}"
+        )
+    k = np.arange(count)
+    ix = k % n[0]
+    iy = (k // n[0]) % n[1]
+    iz = k // (n[0] * n[1])
+    pos = np.asarray(region.lo) + spacing * (np.stack([ix, iy, iz], axis=1) + 0.5)
+    if jitter > 0:
+        rng = np.random.default_rng(seed)
+        pos[:, :2] += rng.uniform(-jitter, jitter, size=(count, 2))
+    if plane_z is not None:
+        pos[:, 2] = plane_z
+    return pos
+
+
+def _check_plane(owner: str, region: Box, plane_z: float) -> None:
+    if not region.lo[2] <= plane_z <= region.hi[2]:
+        raise ValueError(
+            f"{owner}.plane_z must lie in the region's z range [{region.lo[2]}, "
+            f"{region.hi[2]}], got {plane_z!r}"
+        )
+
+
+def random_in_box(
+    region: Box,
+    radius: float | np.ndarray,
+    count: int | None = None,
+    seed: int = 0,
+    max_attempts: int = 200,
+    plane_z: float | None = None,
+) -> np.ndarray:
+    """Random non-overlapping sphere centres inside ``region`` (spheres fully inside).
+
+    Args:
+        region: box to fill.
+        radius: one radius, or an array of radii (one per particle, count taken from it).
+        count: number of particles when ``radius`` is a scalar.
+        seed: random seed.
+        max_attempts: trials per particle before giving up.
+        plane_z: 2-D mode (``sim.plane_z``): discs inside the region's x-y rectangle, centres
+            at z = ``plane_z``.
+
+    Returns:
+        (N, 3) positions, in the order of ``radius``.
+
+    Raises:
+        RuntimeError: if a particle cannot be placed (the region is too full); nothing is
+            silently dropped.
+    """
+    radii = np.atleast_1d(np.asarray(radius, dtype=float))
+    if radii.size == 1 and count is not None:
+        radii = np.full(int(count), float(radii[0]))
+    if np.any(~(radii > 0)):
+        raise ValueError("random_in_box.radius must be positive (m)")
+    rng = np.random.default_rng(seed)
+    lo = np.asarray(region.lo, dtype=float)
+    hi = np.asarray(region.hi, dtype=float)
+    axes = 3
+    if plane_z is not None:
+        _check_plane("random_in_box", region, plane_z)
+        axes = 2
+    cell = 2.0 * float(radii.max())
+    grid: dict[tuple[int, int, int], list[int]] = {}
+    pos = np.empty((radii.size, 3))
+    for i in np.argsort(-radii, kind="stable"):
+        r = radii[i]
+        if np.any((hi - lo)[:axes] <= 2 * r):
+            raise ValueError(f"random_in_box: region too small for radius {r}")
+        for _ in range(max_attempts):
+            p = rng.uniform(lo + r, hi - r)
+            if plane_z is not None:
+                p[2] = plane_z
+            c = tuple(np.floor(p / cell).astype(int))
+            ok = True
+            for dx in (-1, 0, 1):
+                for dy in (-1, 0, 1):
+                    for dz in (-1, 0, 1):
+                        for j in grid.get((c[0] + dx, c[1] + dy, c[2] + dz), ()):
+                            if np.sum((pos[j] - p) ** 2) < (r + radii[j]) ** 2:
+                                ok = False
+                                break
+                        if not ok:
+                            break
+                    if not ok:
+                        break
+                if not ok:
+                    break
+            if ok:
+                pos[i] = p
+                grid.setdefault(c, []).append(int(i))
+                break
+        else:
+            fraction = (
+                np.sum(math.pi * radii**2) / (region.length[0] * region.length[1])
+                if plane_z is not None
+                else np.sum(4 / 3 * math.pi * radii**3) / region.volume
+            )
+            raise RuntimeError(
+                f"random_in_box could not place particle {i} (radius {r}) after "
+                f"{max_attempts} attempts; region too full (requested "
+                f"{'area' if plane_z is not None else 'volume'} fraction {fraction:.3f})"
+            )
+    return pos
