@@ -8,6 +8,9 @@ class each, set once per exchange interval from the cell averages of both levels
   orifice it cannot pass is exactly the case the feedback exists for).
 * :class:`BoundaryVelocity` (coarse -> fine): the child's boundary cells are relaxed towards the
   parent's Favre velocity (the shear and pace of the material beyond the faces).
+* :class:`ShearTraction` (coarse -> fine): the tangential traction the parent's material beyond
+  each face carries (its stress on the face) acts on the child's particles in the face's cell:
+  the friction of the slower material beside a flowing zone, which the normal push cannot give.
 * :class:`StressBoundary` (coarse -> fine): a PI controller per interface face pushes the child's
   particles in a layer at the face so that the child's normal stress in the boundary cell
   follows the parent's.
@@ -120,15 +123,52 @@ class BoundaryVelocity:
         du[~held] = 0.0
         self.acceleration = du / interval
 
-    def apply(self, level: _core.Level, index: int) -> None:
-        level.set_coupling_acceleration(index, self.acceleration)
-
     def state(self) -> dict[str, Any]:
         return {"child_acceleration": self.acceleration.tolist()}
 
     def load(self, state: dict[str, Any]) -> None:
         if "child_acceleration" in state:
             self.acceleration = _vec_rows(state["child_acceleration"], len(self.acceleration))
+
+
+class ShearTraction:
+    """Coarse -> fine: per interface face whose cell holds both levels, the tangential part of
+    the parent's traction t = sigma n (sigma the parent's cell stress, compressive positive, n the
+    face's inward normal) times the face's area, spread over the child's mass in the face's cell
+    as an acceleration (a body force standing for a surface traction, like the boundary velocity
+    condition's). ``gain`` scales it (0 switches it off)."""
+
+    def __init__(self, gain: float, grid: dict[str, Any]) -> None:
+        self.gain = gain
+        self.acceleration = np.zeros((len(grid["inside"]), 3))
+        normal = np.asarray(grid["face_normal"], float)
+        edge = np.asarray(grid["edge"], float)
+        self.area = float(np.prod(edge)) / edge[np.argmax(np.abs(normal), axis=1)]
+
+    @property
+    def active(self) -> bool:
+        return self.gain > 0
+
+    def update(
+        self, grid: dict[str, Any], parent: dict[str, Any], child: dict[str, Any], interval: float
+    ) -> None:
+        cells = grid["face_cell"].astype(int)
+        normal = np.asarray(grid["face_normal"], float)
+        traction = np.einsum("kij,kj->ki", np.asarray(parent["stress"])[cells], normal)
+        shear = traction - np.einsum("ki,ki->k", traction, normal)[:, None] * normal
+        mass = np.asarray(child["mass"], float)
+        held = (np.asarray(parent["mass"])[cells] > 0) & (mass[cells] > 0)
+        force = np.zeros_like(self.acceleration)
+        np.add.at(force, cells[held], self.gain * shear[held] * self.area[held, None])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.acceleration = np.where(mass[:, None] > 0, force / mass[:, None], 0.0)
+
+    def state(self) -> dict[str, Any]:
+        return {"shear_acceleration": self.acceleration.tolist()}
+
+    def load(self, state: dict[str, Any]) -> None:
+        if "shear_acceleration" in state:
+            self.acceleration = _vec_rows(state["shear_acceleration"], len(self.acceleration))
 
 
 class StressBoundary:
@@ -287,6 +327,7 @@ class Coupling:
             exchange.velocity_gain, exchange.mass_flux_correction, n_cells
         )
         self.boundary_velocity = BoundaryVelocity(exchange.boundary_velocity_gain, n_cells)
+        self.shear = ShearTraction(exchange.shear_traction, self.grid)
         self.stress: StressBoundary | None = None
         self.advance = Advance(exchange.advance, exchange.advance_min_fraction, self.grid)
         self.parent_coupling = -1
@@ -319,15 +360,17 @@ class Coupling:
     def controllers(self) -> list[Any]:
         return [
             c
-            for c in (self.feedback, self.boundary_velocity, self.stress, self.advance)
+            for c in (self.feedback, self.boundary_velocity, self.shear, self.stress, self.advance)
             if c is not None
         ]
 
     def apply_controls(self, parent: _core.Level, child: _core.Level) -> None:
         if self.feedback.active:
             self.feedback.apply(parent, self.parent_coupling)
-        if self.boundary_velocity.active:
-            self.boundary_velocity.apply(child, self.child_coupling)
+        # Both coarse -> fine body forces act on the child's boundary cells: one acceleration.
+        held = [c.acceleration for c in (self.boundary_velocity, self.shear) if c.active]
+        if held:
+            child.set_coupling_acceleration(self.child_coupling, sum(held[1:], held[0]))
         if self.stress is not None and self.stress.active:
             self.stress.apply(child, self.child_coupling)
 

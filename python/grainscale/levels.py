@@ -61,6 +61,11 @@ class Exchange:
             u_coarse - u_fine removed per interval in the child's boundary cells (every
             component): the shear and the pace the material beyond the faces imposes, which the
             normal push cannot; 0 switches it off.
+        shear_traction: coarse -> fine, the fraction of the tangential traction the parent's
+            material beyond each face carries (its cell stress on the face) that acts on the
+            child's particles in the face's cell: the friction of the slower material beside a
+            flowing zone (a silo's dead zones beside the orifice's converging flow), which the
+            normal push cannot give; 0 switches it off.
         max_lag: how far (in largest parent particles' mass) the parent's own outflow from the
             region may lag behind the child's discharge before the parent pays the rest by
             removing its particles in the region where it holds more than the child.
@@ -89,6 +94,7 @@ class Exchange:
     fade: float = 0.25
     skip_ratio: float = 0.5
     boundary_velocity_gain: float = 1.0
+    shear_traction: float = 1.0
     max_lag: float = 1.0
     advance: float = 1.0
     advance_min_fraction: float = 0.49
@@ -106,12 +112,13 @@ class Exchange:
             "stress_gain",
             "skip_ratio",
             "boundary_velocity_gain",
+            "shear_traction",
             "advance",
         ):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"Exchange.{name} must be non-negative and finite, got {v!r}")
-        for name in ("velocity_gain", "boundary_velocity_gain"):
+        for name in ("velocity_gain", "boundary_velocity_gain", "shear_traction"):
             if getattr(self, name) > 1:
                 raise ValueError(f"Exchange.{name} must be in [0, 1], got {getattr(self, name)}")
         positive("Exchange", "layer", self.layer, " (child diameters)")

@@ -160,6 +160,8 @@ def test_invalid_hierarchies_are_refused():
         ValueError, match=r"Exchange.boundary_velocity_gain must be in \[0, 1\], got 1.5"
     ):
         gs.Exchange(boundary_velocity_gain=1.5)
+    with pytest.raises(ValueError, match=r"Exchange.shear_traction must be in \[0, 1\], got 2"):
+        gs.Exchange(shear_traction=2)
     with pytest.raises(ValueError, match="Exchange.max_lag must be non-negative and finite"):
         gs.Exchange(max_lag=-1)
     with pytest.raises(ValueError, match="Exchange.stress_integral must be non-negative"):
@@ -355,6 +357,37 @@ def test_boundary_cells_are_relaxed_towards_the_coarse_velocity():
     assert boundary[0] and np.count_nonzero(~boundary) > 0
     np.testing.assert_allclose(c.boundary_velocity.acceleration, expected, rtol=1e-12, atol=0)
     assert np.any(np.abs(expected) == 0.6 / h.every)  # the limiter acted somewhere
+
+
+def test_shear_traction_carries_the_coarse_shear_across_each_face():
+    """Exchange.shear_traction: the tangential part of the coarse traction sigma n on each face,
+    times the face's area, acts on the fine mass of the face's cell (corner cells sum their
+    faces); a purely normal stress gives nothing, nor does a cell empty on either level."""
+    h = two_level(cell_size=0.0065, shear_traction=0.5)
+    c = h.couplings[0]
+    g = c.grid
+    n = len(g["inside"])
+    sigma = np.array([[300.0, 0.0, 40.0], [0.0, 300.0, -25.0], [40.0, -25.0, 500.0]])
+    coarse = {"mass": np.full(n, 1e-3), "stress": np.tile(sigma, (n, 1, 1))}
+    fine = {"mass": np.full(n, 2e-3)}
+    cells = g["face_cell"].astype(int)
+    fine["mass"][cells[0]] = 0.0  # a face's cell without fine particles
+    c.shear.update(g, coarse, fine, h.every)
+    edge = np.asarray(g["edge"])
+    expected = np.zeros((n, 3))
+    for k, cell in enumerate(cells):
+        normal = np.asarray(g["face_normal"][k])
+        t = sigma @ normal
+        area = np.prod(edge) / edge[np.argmax(np.abs(normal))]
+        expected[cell] += 0.5 * (t - (t @ normal) * normal) * area / 2e-3
+    expected[cells[0]] = 0.0
+    np.testing.assert_allclose(c.shear.acceleration, expected, rtol=1e-12, atol=1e-12)
+    side = np.abs(np.asarray(g["face_normal"])[:, 2]) < 0.5
+    assert np.any(np.abs(c.shear.acceleration[cells[side], 2]) > 0)  # sigma_xz, sigma_yz act
+    coarse["stress"] = np.tile(np.diag([300.0, 300.0, 500.0]), (n, 1, 1))
+    c.shear.update(g, coarse, fine, h.every)
+    assert not np.any(c.shear.acceleration)
+    assert not two_level(shear_traction=0.0).couplings[0].shear.active
 
 
 def test_feedback_starts_a_coarse_bed_at_rest():
