@@ -53,7 +53,24 @@ void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Vis
   }
 }
 
-void CouplingForces::apply(ParticleStore& ps, const Domain& domain, Real dt) const {
+std::vector<Real> CouplingForces::push_total(const ParticleStore& ps, const Domain& domain) const {
+  std::vector<Real> total(grid_->faces().size(), 0.0);
+  if (pressure.empty()) return total;
+  for_each(ps, domain, [](Index, int) {}, [&](Index, int f, Real m, Real) { total[f] += m; });
+  return total;
+}
+
+std::vector<Real> CouplingForces::push_scale(const std::vector<Real>& total) const {
+  const auto& faces = grid_->faces();
+  std::vector<Real> scale(faces.size(), 1.0);
+  if (pressure.empty()) return scale;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    if (total[f] > 0) scale[f] = std::min(pressure[f] * faces[f].area / total[f], kMaxPushScale);
+  return scale;
+}
+
+void CouplingForces::apply(ParticleStore& ps, const Domain& domain, Real dt,
+                           const std::vector<Real>& scale) const {
   const bool feedback = !acceleration.empty();
   if (!feedback && pressure.empty()) return;
   const bool limited = !velocity_min.empty();
@@ -72,15 +89,18 @@ void CouplingForces::apply(ParticleStore& ps, const Domain& domain, Real dt) con
           }
         ps.force[i] += ps.mass[i] * a;
       },
-      [&](Index i, int f, Real magnitude, Real) { ps.force[i] += magnitude * faces[f].normal; });
+      [&](Index i, int f, Real magnitude, Real) {
+        ps.force[i] += scale[f] * magnitude * faces[f].normal;
+      });
 }
 
-std::vector<Real> CouplingForces::push_moment(const ParticleStore& ps, const Domain& domain) const {
+std::vector<Real> CouplingForces::push_moment(const ParticleStore& ps, const Domain& domain,
+                                              const std::vector<Real>& scale) const {
   std::vector<Real> moment(grid_->faces().size(), 0.0);
   if (pressure.empty()) return moment;
   for_each(
       ps, domain, [](Index, int) {},
-      [&](Index, int f, Real magnitude, Real s) { moment[f] += magnitude * s; });
+      [&](Index, int f, Real magnitude, Real s) { moment[f] += scale[f] * magnitude * s; });
   return moment;
 }
 

@@ -46,10 +46,21 @@ class CouplingForces {
   std::vector<Real> pressure;
   std::vector<Real> max_inward_speed;
 
-  // Adds the forces to the owned particles of `ps` (dt: the level's time step, for the limiter).
-  void apply(ParticleStore& ps, const Domain& domain, Real dt) const;
+  // The push of a face totals pressure x area whatever its layer's packing: each particle's
+  // p pi r^2 w is scaled by p A / sum(p pi r^2 w) over the layer (at most kMaxPushScale, so that
+  // a few particles in an almost empty layer are not shot into the bed).
+  static constexpr Real kMaxPushScale = 4;
+  // Per interface face: sum over the owned particles of p pi r^2 w (N), this rank only.
+  std::vector<Real> push_total(const ParticleStore& ps, const Domain& domain) const;
+  // Per interface face: the scale of its push, from the totals summed over every rank.
+  std::vector<Real> push_scale(const std::vector<Real>& total) const;
+  // Adds the forces to the owned particles of `ps` (dt: the level's time step, for the limiter;
+  // scale: push_scale of the rank-summed push_total).
+  void apply(ParticleStore& ps, const Domain& domain, Real dt,
+             const std::vector<Real>& scale) const;
   // Per interface face: sum over the owned particles of |F_push| s (N m), this rank only.
-  std::vector<Real> push_moment(const ParticleStore& ps, const Domain& domain) const;
+  std::vector<Real> push_moment(const ParticleStore& ps, const Domain& domain,
+                                const std::vector<Real>& scale) const;
 
  private:
   std::shared_ptr<const ExchangeGrid> grid_;

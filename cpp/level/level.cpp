@@ -417,7 +417,7 @@ void Level::compute_forces(const Law& law, bool defer_reverse) {
     w.force.setZero();
     w.torque.setZero();
   }
-  for (const CouplingForces& c : couplings_) c.apply(ps_, domain_, dt_);
+  for (const CouplingForces& c : couplings_) c.apply(ps_, domain_, dt_, coupling_push_scale(c));
   if constexpr (kStats) stats_.clear();
   accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
   // The ghost forces travel while the walls are computed (and, deferred, while the particles

@@ -180,6 +180,8 @@ class Level {
   CouplingForces& coupling(int index);
   // Collective: coupling(index).push_moment summed over the ranks (N m per interface face).
   std::vector<Real> coupling_push_moment(int index);
+  // The scale of each face's push (collective: sums the push totals over the ranks).
+  std::vector<Real> coupling_push_scale(const CouplingForces& c);
   // --- end hierarchy coupling ---
 
  private:

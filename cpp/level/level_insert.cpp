@@ -326,8 +326,15 @@ CouplingForces& Level::coupling(int index) {
   return couplings_[index];
 }
 
+std::vector<Real> Level::coupling_push_scale(const CouplingForces& c) {
+  std::vector<Real> total = c.push_total(ps_, domain_);
+  if (!c.pressure.empty()) comm_.sum_in_place(total);  // every rank holds the same pressures
+  return c.push_scale(total);
+}
+
 std::vector<Real> Level::coupling_push_moment(int index) {
-  std::vector<Real> moment = coupling(index).push_moment(ps_, domain_);
+  const CouplingForces& c = coupling(index);
+  std::vector<Real> moment = c.push_moment(ps_, domain_, coupling_push_scale(c));
   comm_.sum_in_place(moment);
   return moment;
 }

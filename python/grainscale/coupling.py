@@ -31,10 +31,11 @@ from . import _core
 
 # The stress controller's output is clipped to [0, PRESSURE_CAP x the parent's stress]: it never
 # pulls, and the push, which stands for the contacts with the material beyond the face, cannot
-# exceed what that material carries by much. Where the child's material yields (flows) it never
-# reaches the target, and a larger cap let the integral wind the push up to 5 x the parent's
-# stress and drive the flow ever faster (docs/studies/mlcg_jam/NOTES.md).
-PRESSURE_CAP = 2.0
+# exceed what that material carries. A face's push totals pressure x area whatever its layer's
+# packing (cpp/coupling/coupling_forces.hpp); before it did, a loose layer took less and the
+# controller needed a margin (2 x), at which it sat wherever the child's material flows and set
+# the rate (docs/studies/mlcg_jam/NOTES.md).
+PRESSURE_CAP = 1.0
 # Without a coarse motion to follow, the push of a face stops for particles moving inwards faster
 # than this fraction of the free-fall speed over a fine diameter.
 REST_SPEED_FRACTION = 0.1
@@ -174,8 +175,9 @@ class ShearTraction:
 class StressBoundary:
     """Coarse -> fine: per interface face a PI controller (anti-windup by conditional
     integration, never pulling, at most PRESSURE_CAP x the parent's stress) whose pressure pushes
-    the child's particles in a layer at the face so that the child's normal stress in the face's
-    cell, counting the push's virial, follows the parent's; faces whose parent cell holds less
+    the child's particles in a layer at the face (in total pressure x the face's area) so that
+    the child's normal stress in the face's cell, counting the push's virial, follows the
+    parent's; faces whose parent cell holds less
     than ``skip_ratio`` x the child's solid fraction are not controlled. A particle already moving
     inwards faster than the parent's fastest inward motion at the face (or, for a parent at rest,
     REST_SPEED_FRACTION x the free-fall speed over a fine diameter) is not pushed."""

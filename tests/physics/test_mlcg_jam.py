@@ -5,8 +5,8 @@ the region (its own outlet, plus the debt it pays by removing its particles wher
 than the fine level) equals the fine level's within 5 %, the coarse inventory holds the material
 of the equipment to within the allowed lag, and the books of the hierarchy close to round-off at
 every sample. The discharge rate, a mean over three seeds of this short, shallow run (one seed's
-rate scatters by about 20 % here: 16.5, 23.3 and 26.8 g/s for seeds 1-3), is held within 15 %
-of the resolved run's; the issue's 5 % is measured on the full run (docs/studies/mlcg_jam).
+rate scatters by about 20 % here), is held within 15 % of the resolved run's; the issue's 5 % is
+measured on the full run (docs/studies/mlcg_jam).
 Before the books were exact, the fine region drained to 30 % of the rate without mass from
 nowhere."""
 
