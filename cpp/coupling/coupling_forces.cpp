@@ -55,7 +55,6 @@ void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Vis
 
 std::vector<Real> CouplingForces::push_total(const ParticleStore& ps, const Domain& domain) const {
   std::vector<Real> total(grid_->faces().size(), 0.0);
-  if (pressure.empty()) return total;
   for_each(ps, domain, [](Index, int) {}, [&](Index, int f, Real m, Real) { total[f] += m; });
   return total;
 }
@@ -63,7 +62,6 @@ std::vector<Real> CouplingForces::push_total(const ParticleStore& ps, const Doma
 std::vector<Real> CouplingForces::push_scale(const std::vector<Real>& total) const {
   const auto& faces = grid_->faces();
   std::vector<Real> scale(faces.size(), 1.0);
-  if (pressure.empty()) return scale;
   for (std::size_t f = 0; f < faces.size(); ++f)
     if (total[f] > 0) scale[f] = std::min(pressure[f] * faces[f].area / total[f], kMaxPushScale);
   return scale;

@@ -50,12 +50,14 @@ class CouplingForces {
   // p pi r^2 w is scaled by p A / sum(p pi r^2 w) over the layer (at most kMaxPushScale, so that
   // a few particles in an almost empty layer are not shot into the bed).
   static constexpr Real kMaxPushScale = 4;
-  // Per interface face: sum over the owned particles of p pi r^2 w (N), this rank only.
+  // Per interface face: sum over the owned particles of p pi r^2 w (N), this rank only (needs
+  // `pressure` set).
   std::vector<Real> push_total(const ParticleStore& ps, const Domain& domain) const;
-  // Per interface face: the scale of its push, from the totals summed over every rank.
+  // Per interface face: the scale of its push, from the totals summed over every rank (needs
+  // `pressure` set).
   std::vector<Real> push_scale(const std::vector<Real>& total) const;
   // Adds the forces to the owned particles of `ps` (dt: the level's time step, for the limiter;
-  // scale: push_scale of the rank-summed push_total).
+  // scale: push_scale of the rank-summed push_total, read only when `pressure` is set).
   void apply(ParticleStore& ps, const Domain& domain, Real dt,
              const std::vector<Real>& scale) const;
   // Per interface face: sum over the owned particles of |F_push| s (N m), this rank only.

@@ -327,8 +327,9 @@ CouplingForces& Level::coupling(int index) {
 }
 
 std::vector<Real> Level::coupling_push_scale(const CouplingForces& c) {
+  if (c.pressure.empty()) return {};  // no stress condition (every rank alike): nothing pushed
   std::vector<Real> total = c.push_total(ps_, domain_);
-  if (!c.pressure.empty()) comm_.sum_in_place(total);  // every rank holds the same pressures
+  comm_.sum_in_place(total);
   return c.push_scale(total);
 }
 

@@ -142,9 +142,7 @@ class ShearTraction:
     def __init__(self, gain: float, grid: dict[str, Any]) -> None:
         self.gain = gain
         self.acceleration = np.zeros((len(grid["inside"]), 3))
-        normal = np.asarray(grid["face_normal"], float)
-        edge = np.asarray(grid["edge"], float)
-        self.area = float(np.prod(edge)) / edge[np.argmax(np.abs(normal), axis=1)]
+        self.area = np.asarray(grid["face_area"], float)
 
     @property
     def active(self) -> bool:
@@ -177,10 +175,10 @@ class StressBoundary:
     integration, never pulling, at most PRESSURE_CAP x the parent's stress) whose pressure pushes
     the child's particles in a layer at the face (in total pressure x the face's area) so that
     the child's normal stress in the face's cell, counting the push's virial, follows the
-    parent's; faces whose parent cell holds less
-    than ``skip_ratio`` x the child's solid fraction are not controlled. A particle already moving
-    inwards faster than the parent's fastest inward motion at the face (or, for a parent at rest,
-    REST_SPEED_FRACTION x the free-fall speed over a fine diameter) is not pushed."""
+    parent's; faces whose parent cell holds less than ``skip_ratio`` x the child's solid fraction
+    are not controlled. A particle already moving inwards faster than the parent's fastest inward
+    motion at the face (or, for a parent at rest, REST_SPEED_FRACTION x the free-fall speed over
+    a fine diameter) is not pushed."""
 
     def __init__(
         self,
@@ -372,7 +370,7 @@ class Coupling:
         # Both coarse -> fine body forces act on the child's boundary cells: one acceleration.
         held = [c.acceleration for c in (self.boundary_velocity, self.shear) if c.active]
         if held:
-            child.set_coupling_acceleration(self.child_coupling, sum(held[1:], held[0]))
+            child.set_coupling_acceleration(self.child_coupling, np.sum(held, axis=0))
         if self.stress is not None and self.stress.active:
             self.stress.apply(child, self.child_coupling)
 
