@@ -90,6 +90,7 @@ py::dict fields_dict(const CellFields& f) {
   d["velocity"] = rows3(f.velocity);
   d["velocity_min"] = rows3(f.velocity_min);
   d["velocity_max"] = rows3(f.velocity_max);
+  d["velocity_spread"] = rows3(f.velocity_spread);
   py::array_t<Real> stress(
       {static_cast<py::ssize_t>(f.stress.size()), py::ssize_t(3), py::ssize_t(3)});
   auto s = stress.mutable_unchecked<3>();

@@ -84,6 +84,7 @@ CellFields CellAverager::finish(const Communicator& comm) {
   f.stress.assign(nc, {});
   f.velocity_min.assign(nc, Vec3::Zero());
   f.velocity_max.assign(nc, Vec3::Zero());
+  f.velocity_spread.assign(nc, Vec3::Zero());
   const Real volume = grid_.cell_volume();
   const Real per_sample = samples_ > 0 ? 1.0 / samples_ : 0;
   for (int c = 0; c < nc; ++c) {
@@ -99,6 +100,7 @@ CellFields CellAverager::finish(const Communicator& comm) {
       Real kinetic = s[kKinetic + k] * per_sample;
       if (m > 0) kinetic -= p[r] * per_sample * p[col] * per_sample / m;
       f.stress[c][k] = (kinetic + s[kVirial + k] * per_sample) / volume;
+      if (r == col && m > 0) f.velocity_spread[c][r] = std::sqrt(std::max(kinetic / m, Real(0)));
     }
     if (s[kCount] > 0)
       for (int a = 0; a < 3; ++a) {

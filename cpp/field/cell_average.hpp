@@ -1,6 +1,6 @@
 // Cell averages of one level on a FieldGrid (DESIGN.md 2.7, 4): per cell the mass, the Favre
-// (mass-weighted) velocity, the solid fraction, the stress tensor and the range of the particle
-// velocities, averaged over the samples taken since the last finish().
+// (mass-weighted) velocity, the solid fraction, the stress tensor, the range of the particle
+// velocities and their spread, averaged over the samples taken since the last finish().
 //
 // A particle belongs to the cell of its centre (positions wrapped on periodic axes). With S
 // samples of a cell of volume V:
@@ -8,6 +8,8 @@
 //   solid fraction  phi = (1/(S V)) sum_s sum_i v_i   (v_i the particle volume; disc area x 1 m
 //                   in 2-D)
 //   velocity        u = sum_s sum_i m_i v_i / sum_s sum_i m_i        (Favre average)
+//   spread          s_a = sqrt(K_aa / M - u_a^2), per component: the mass-weighted standard
+//                   deviation of the particle velocities about u (K below)
 //   stress          sigma = (1/V) [ K - P P^T / M  +  W ],  compression positive, with
 //                   K = (1/S) sum m v v^T, P = (1/S) sum m v (the kinetic part: the velocity
 //                   fluctuations about the cell's mean over the interval) and the contact virial
@@ -43,7 +45,10 @@ struct CellFields {
   std::vector<Vec3> velocity;                    // m/s, Favre; zero in empty cells
   std::vector<std::array<Real, 9>> stress;       // Pa, row-major, compression positive
   std::vector<Vec3> velocity_min, velocity_max;  // component-wise over particles and samples
-  std::vector<Real> particles;                   // mean number of particles
+  // m/s, per component: the mass-weighted standard deviation of the particle velocities about
+  // the Favre velocity over particles and samples, sqrt(K_aa / M - u_a^2)
+  std::vector<Vec3> velocity_spread;
+  std::vector<Real> particles;  // mean number of particles
 };
 
 class CellAverager {

@@ -1,6 +1,7 @@
 """Eulerian cell averages of a simulation (DESIGN.md 2.7): mass, Favre velocity, solid fraction,
-stress tensor (kinetic + contact virial, compression positive) and velocity range on a grid of
-hexahedral cells; the averaging is done in C++ (cpp/field/cell_average.hpp, which gives the
+stress tensor (kinetic + contact virial, compression positive), velocity range and velocity
+spread (standard deviation about the Favre velocity, m/s per component) on a grid of hexahedral
+cells; the averaging is done in C++ (cpp/field/cell_average.hpp, which gives the
 definitions). The hierarchy's exchange uses the same averages.
 
     avg = gs.fields.CellAverages(sim, gs.Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.05)), cell_size=0.01)
@@ -9,6 +10,7 @@ definitions). The hierarchy's exchange uses the same averages.
         avg.sample()            # the contacts of the last step: needs record_contacts=True
     f = avg.finish()            # dict of numpy arrays, cell c = ix + nx (iy + ny iz)
     f["solid_fraction"], f["velocity"], f["stress"]   # (n,), (n, 3), (n, 3, 3)
+    f["velocity_min"], f["velocity_max"], f["velocity_spread"]   # (n, 3) each
 
 Under MPI ``sample`` is local and ``finish`` is collective (sums over the ranks).
 """

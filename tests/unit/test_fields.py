@@ -1,5 +1,6 @@
 """Cell averages (grainscale.fields, cpp/field/cell_average.hpp): mass, Favre velocity, solid
-fraction, velocity range and the stress tensor against what they must be by construction."""
+fraction, velocity range and spread, and the stress tensor against what they must be by
+construction."""
 
 from __future__ import annotations
 
@@ -36,6 +37,9 @@ def test_uniform_motion_gives_its_velocity_and_the_lattice_solid_fraction():
     assert np.allclose(f["solid_fraction"], phi, rtol=1e-12)
     assert np.allclose(f["velocity"], [0.1, -0.2, 0.05], rtol=1e-12)
     assert np.allclose(f["velocity_min"], f["velocity_max"])
+    # Every particle at the mean: no spread, up to the round-off of a one-pass variance (a few ulp
+    # of u^2, so a few sqrt(machine epsilon) x the speed after the square root).
+    assert np.allclose(f["velocity_spread"], 0, atol=1e-7)
     # No contacts (2.5 mm spacing, 2 mm spheres) and no fluctuation: no stress.
     assert np.abs(f["stress"]).max() < 1e-9
     assert avg.finish()["samples"] == 0  # finish starts a new interval
@@ -56,6 +60,8 @@ def test_kinetic_stress_is_the_velocity_fluctuation():
     assert f["stress"][0, 0, 0] == pytest.approx(expected_xx, rel=1e-9)
     assert abs(f["stress"][0, 1, 1]) < 1e-9 * expected_xx
     assert f["velocity_min"][0, 0] == pytest.approx(-0.3) and f["velocity_max"][0, 0] == 0.3
+    # The spread is the standard deviation about the mean: 0.3 m/s along x, none across.
+    assert f["velocity_spread"][0] == pytest.approx([0.3, 0.0, 0.0], abs=1e-12)
 
 
 def test_virial_of_a_bed_at_rest_balances_its_weight():
