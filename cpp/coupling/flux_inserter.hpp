@@ -27,13 +27,14 @@
 // The shell is the face rectangle, two largest fine diameters deep (at most the cell's depth),
 // starting one smallest fine radius outside the face, so that centres reach the face as the
 // grains of the bed beyond do (a shell flush with the face would leave the face's cell short of
-// a layer r thick). Particles are placed with the face's mass-weighted inflow velocity (or, in
-// an interval without inflow, the parent's velocity beyond the face) and the inflow spin scaled
-// by the size ratio (w R kept: the surface speed of a spinning grain); what finds no room waits.
-// A placed sphere needs its centre over the face rectangle, not the whole sphere inside it: a face
-// is a few fine diameters across, and whole spheres would leave the rim unusable (half the area of
-// a 7.5 mm face for 2 mm grains), so that a dense inflow, a pour or a sinking bed, could not be
-// carried: the fine bed then formed loose and short of the parent's mass (jam study, stop 23).
+// a layer r thick). Particles are placed with the parent's bulk velocity at the face (its Favre
+// velocity in the face's cell, not the crossings' speed-weighted mean: Interface::book) and the
+// inflow spin scaled by the size ratio (w R kept: the surface speed of a spinning grain); what
+// finds no room waits. A placed sphere needs its centre over the face rectangle, not the whole
+// sphere inside it: a face is a few fine diameters across, and whole spheres would leave the rim
+// unusable (half the area of a 7.5 mm face for 2 mm grains), so that a dense inflow, a pour or a
+// sinking bed, could not be carried: the fine bed then formed loose and short of the parent's mass
+// (jam study, stop 23).
 #pragma once
 
 #include <cstdint>
@@ -56,7 +57,7 @@ class FluxInserter {
                Real density, std::int32_t material, Real spin_scale, Real deadband,
                std::uint64_t seed);
 
-  // Books `mass` (kg) entering with mean velocity `velocity` and spin `spin` (coarse).
+  // Books `mass` (kg) entering; what is placed gets `velocity` (m/s) and `spin` (coarse, rad/s).
   void feed(Real mass, const Vec3& velocity, const Vec3& spin);
   // Velocity (and zero spin) of the particles placed after an interval without inflow.
   void set_velocity(const Vec3& velocity);

@@ -68,7 +68,7 @@ void Interface::book(const IntervalFlux& flux, const std::vector<Vec3>& beyond) 
     FluxInserter& ins = inserters_[f];
     if (in.mass > 0) {
       const Vec3 spin = in.inertia > 0 ? Vec3(in.spin / in.inertia) : Vec3::Zero();
-      ins.feed(in.mass, in.momentum / in.mass, spin);
+      ins.feed(in.mass, beyond[f], spin);
     } else {
       ins.set_velocity(beyond[f]);
     }

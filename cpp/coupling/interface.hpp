@@ -49,8 +49,12 @@ class Interface {
   void start_flux(Level& parent, Real margin);
   IntervalFlux finish_flux(Level& parent);
   // Child: books an interval of the parent's crossings (inflow fed, outflow debited); `beyond`:
-  // per face, the velocity of what is placed at a face that had no inflow (the parent's velocity
-  // beyond it).
+  // per face, the velocity given to what is placed there, the parent's bulk velocity at the face
+  // (its Favre velocity in the face's cell). Not the crossings' mean: the particles that cross a
+  // face in an interval are weighted by their speed, and by their fluctuation in and out again,
+  // so their mean runs far ahead of the bulk (3 x in the jam study's silo), while placed
+  // particles fill a volume, whose grains move as the bulk does
+  // (docs/studies/mlcg_jam/NOTES.md, stop 28).
   void book(const IntervalFlux& flux, const std::vector<Vec3>& beyond);
   // Child: per face, the mass of the child's particles that left the region through it.
   void credit(const std::vector<Real>& left);

@@ -335,7 +335,7 @@ class Coupling:
         self.region_outlet = -1
         self.flux: dict[str, Any] | None = None
         # Per face, the parent's Favre velocity in the face's cell over the last interval: given
-        # to what is placed at a face without inflow.
+        # to what is placed at the face (the bulk's velocity, not the crossings', Interface::book).
         self.beyond = np.zeros((len(self.grid["face_cell"]), 3))
         self.parent_fields: dict[str, Any] | None = None
         self.child_fields: dict[str, Any] | None = None

@@ -295,6 +295,35 @@ def test_interface_ledger_debits_are_paid_by_extraction():
     assert s_in[gone].max() <= s_in[kept_near].min()
 
 
+def test_inflow_takes_the_bulk_velocity_not_the_crossings():
+    """What the child places at a face moves with the parent's bulk at the face (the Favre
+    velocity it is given), not with the mean velocity of the parent's crossings, which are
+    weighted by speed and so run ahead of the bulk."""
+    h = two_level(advance=0.0)
+    h.run(intervals=20)  # settled books; the pour has not reached the region yet
+    c = h.couplings[0]
+    itf, child, g = c.interface, h.level(1), c.grid
+    n = len(g["face_cell"])
+    top = int(np.flatnonzero(g["face_normal"][:, 2] < -0.5)[0])  # a face crossed downwards
+    with child.particles(writable=False) as p:
+        before = set(np.asarray(p.id).tolist())
+    mass = 10 * GLASS.density * 4 / 3 * np.pi * (1.05e-3) ** 3  # ten fine grains at most
+    zero = {k: np.zeros(n) for k in ("mass", "count", "inertia")}
+    zero.update(momentum=np.zeros((n, 3)), spin=np.zeros((n, 3)))
+    inward = dict(zero, mass=np.where(np.arange(n) == top, mass, 0.0))
+    crossing = np.zeros((n, 3))
+    crossing[top] = (0.0, 0.0, -0.5)  # the crossings' speed-weighted mean
+    inward["momentum"] = mass * crossing
+    bulk = np.tile((0.01, -0.02, -0.03), (n, 1))
+    itf.book({"inward": inward, "outward": zero}, bulk)
+    assert itf.insert(child._level) > 0
+    with child.particles(writable=False) as p:
+        new = np.array([i not in before for i in np.asarray(p.id).tolist()])
+        v = np.asarray(p.velocity)[new]
+    assert len(v) > 0
+    np.testing.assert_allclose(v, np.tile(bulk[top], (len(v), 1)), rtol=0, atol=1e-15)
+
+
 def test_three_levels_in_a_chain():
     middle = gs.Box(lo=(0.0, 0.0, 0.0), hi=(0.04, 0.04, 0.045))  # the bin's width, lower part
     inner = gs.Box(lo=(0.007, 0.007, 0.0), hi=(0.033, 0.033, 0.02))
