@@ -300,7 +300,7 @@ def test_inflow_takes_the_bulk_velocity_not_the_crossings():
     velocity it is given), not with the mean velocity of the parent's crossings, which are
     weighted by speed and so run ahead of the bulk."""
     h = two_level(advance=0.0)
-    h.run(intervals=20)  # settled books; the pour has not reached the region yet
+    h.run(intervals=20)
     c = h.couplings[0]
     itf, child, g = c.interface, h.level(1), c.grid
     n = len(g["face_cell"])
