@@ -28,11 +28,13 @@
 namespace grainscale {
 
 struct FaceFlux {
-  Real mass = 0;                 // kg
-  Real count = 0;                // particles
-  Vec3 momentum = Vec3::Zero();  // kg m/s: the face's velocity is momentum / mass
-  Vec3 spin = Vec3::Zero();      // sum of I w (kg m^2/s): the face's spin is spin / inertia
-  Real inertia = 0;              // sum of I (kg m^2)
+  Real mass = 0;   // kg
+  Real count = 0;  // particles
+  // kg m/s: momentum / mass is the crossings' mean velocity, weighted by speed and so ahead of
+  // the bulk; a measurement only (what the child places moves with the bulk, Interface::book)
+  Vec3 momentum = Vec3::Zero();
+  Vec3 spin = Vec3::Zero();  // sum of I w (kg m^2/s): the face's spin is spin / inertia
+  Real inertia = 0;          // sum of I (kg m^2)
 };
 
 struct IntervalFlux {
