@@ -39,7 +39,7 @@ $(VENV)/.installed: $(SOURCES) | system-deps $(VENV)/bin/python
 install: system-deps $(VENV)/.installed
 
 demo: install
-	$(PY) -m grainscale.examples.hopper_demo --output out/demo
+	$(VENV)/bin/grainscale demo --output out/demo
 
 # Lint, the C++ unit tests (serial build), the Python suite (unit, physics validation, demo),
 # then the MPI tests on 2 ranks and on 3 (more ranks than cores).

@@ -30,19 +30,7 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
     rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
     t_setup = time.perf_counter()
-    hi = case.box_hi
-    sim, mat = liggghts_matched_simulation(gs, case, (0.0, 0.0, 0.0), hi, position, velocity)
-    # six one-sided planes of the particle material; normals point into the box
-    walls = [
-        ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
-        ((hi[0], 0.0, 0.0), (-1.0, 0.0, 0.0)),
-        ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
-        ((0.0, hi[1], 0.0), (0.0, -1.0, 0.0)),
-        ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-        ((0.0, 0.0, hi[2]), (0.0, 0.0, -1.0)),
-    ]
-    for point, normal in walls:
-        sim.add_wall(gs.geometry.Plane(point=point, normal=normal, material=mat))
+    sim = settle_simulation(gs, case, position, velocity)
     if balance_every is not None and sim.ranks > 1:
         sim.balance(every=balance_every)  # else the engine's default (every 500 steps)
     ke_initial = float(sim.kinetic_energy())
@@ -94,6 +82,24 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
         "thermo": thermo,
         "rss_before_sim_kib": rss_before_kib,
     }
+
+
+def settle_simulation(gs: Any, case: SettleCase, position: np.ndarray, velocity: np.ndarray) -> Any:
+    """The settle case: the particles in a closed box of six one-sided planes of their material
+    (normals into the box)."""
+    hi = case.box_hi
+    sim, mat = liggghts_matched_simulation(gs, case, (0.0, 0.0, 0.0), hi, position, velocity)
+    walls = [
+        ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
+        ((hi[0], 0.0, 0.0), (-1.0, 0.0, 0.0)),
+        ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+        ((0.0, hi[1], 0.0), (0.0, -1.0, 0.0)),
+        ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+        ((0.0, 0.0, hi[2]), (0.0, 0.0, -1.0)),
+    ]
+    for point, normal in walls:
+        sim.add_wall(gs.geometry.Plane(point=point, normal=normal, material=mat))
+    return sim
 
 
 def gather_all(sim: Any, value: Any) -> list[Any]:

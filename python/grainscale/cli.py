@@ -1,10 +1,10 @@
 """The ``grainscale`` command.
 
-    grainscale demo [--output DIR] [--particles N] [--duration S] [--seed K] [--quick]
+    grainscale demo [--output DIR] [--particles N] [--duration S] [--seed K] [--stl FILE] [--quick]
     grainscale info
 
-``demo`` runs :mod:`grainscale.examples.pour_and_settle` with the same options; ``info`` prints
-the version and how the C++ core was built.
+``demo`` runs the demo of ``make demo``, :mod:`grainscale.examples.hopper_demo`, with the same
+options; ``info`` prints the version and how the C++ core was built.
 """
 
 from __future__ import annotations
@@ -43,10 +43,10 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from .examples import pour_and_settle
+    from .examples import hopper_demo
 
     try:
-        pour_and_settle.run_from_args(args)
+        hopper_demo.run_from_args(args)
     except ValueError as err:
         print(f"grainscale demo: error: {err}", file=sys.stderr)
         return 2
@@ -55,7 +55,7 @@ def _demo(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
-    from .examples import pour_and_settle
+    from .examples import hopper_demo
 
     parser = argparse.ArgumentParser(
         prog="grainscale", description="grainscale: discrete element method for granular media."
@@ -65,11 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     demo = sub.add_parser(
         "demo",
-        help="pour glass beads into a box and let them settle (VTK, PNG plot, summary)",
-        description="Pour glass beads into a closed box and let them settle. Writes ParaView "
-        "files (particles.pvd), a PNG plot and summary.md into the output directory.",
+        help="fill a conical hopper and discharge it (VTK, PNG plot, summary); make demo",
+        description=hopper_demo.DESCRIPTION + " Writes ParaView files (particles.pvd), a PNG "
+        "plot, history.csv and summary.md into the output directory.",
     )
-    pour_and_settle.add_arguments(demo)
+    hopper_demo.add_arguments(demo)
     demo.set_defaults(func=_demo)
     info = sub.add_parser("info", help="version and build configuration")
     info.set_defaults(func=_info)

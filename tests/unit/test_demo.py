@@ -1,4 +1,5 @@
-"""The demo (``make demo``) and the ``grainscale`` command: outputs exist and the bed settles."""
+"""The pour-and-settle example (outputs exist and the bed settles) and the ``grainscale``
+command."""
 
 from __future__ import annotations
 
@@ -13,7 +14,9 @@ import pytest
 
 import grainscale as gs
 from grainscale import cli
-from grainscale.examples import pour_and_settle
+from grainscale.examples import hopper_demo, pour_and_settle
+
+MAKEFILE = Path(__file__).resolve().parents[2] / "Makefile"
 
 
 @pytest.fixture(scope="module")
@@ -96,8 +99,10 @@ def test_cli_info(capsys: pytest.CaptureFixture[str]) -> None:
     assert ("serial build" in text) or ("built with MPI" in text)
 
 
-def test_cli_demo_options() -> None:
+def test_cli_demo_is_the_hopper_demo() -> None:
+    """``grainscale demo`` takes the hopper demo's options (``make demo`` runs it)."""
     args = cli.build_parser().parse_args(["demo", "--quick", "--particles", "50", "--seed", "3"])
-    case = pour_and_settle.case_from_args(args)
-    assert (case.particles, case.duration, case.seed) == (50, pour_and_settle.QUICK_DURATION, 3)
+    case = hopper_demo.case_from_args(args)
+    assert (case.particles, case.duration, case.seed) == (50, hopper_demo.QUICK_DURATION, 3)
     assert args.output == "out/demo"
+    assert "$(VENV)/bin/grainscale demo --output out/demo" in MAKEFILE.read_text()

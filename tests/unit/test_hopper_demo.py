@@ -1,4 +1,5 @@
-"""The hopper demo (``make demo``): STL hopper, poured fill, discharge; its files and physics."""
+"""The demo (``make demo``, ``grainscale demo``: the hopper of grainscale.examples.hopper_demo):
+STL hopper, poured fill, discharge; its files and physics."""
 
 from __future__ import annotations
 
@@ -11,15 +12,16 @@ import numpy as np
 import pytest
 
 import grainscale as gs
+from grainscale import cli
 from grainscale.examples import hopper_demo, hopper_geometry
 
 
 @pytest.fixture(scope="module")
 def quick_hopper(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """Run ``python -m grainscale.examples.hopper_demo --quick`` once; (output dir, stdout)."""
+    """Run ``grainscale demo --quick`` (what ``make demo`` runs) once; (output dir, stdout)."""
     out = tmp_path_factory.mktemp("hopper")
     proc = subprocess.run(
-        [sys.executable, "-m", "grainscale.examples.hopper_demo", "--quick", "--output", out],
+        [sys.executable, "-m", "grainscale.cli", "demo", "--quick", "--output", out],
         capture_output=True,
         text=True,
         timeout=120,
@@ -109,3 +111,9 @@ def test_hopper_demo_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> 
         hopper_demo.main(["--particles", "3", "--output", "unused"])
     assert exc.value.code == 2
     assert "HopperCase.particles must be at least 10, got 3" in capsys.readouterr().err
+
+
+def test_grainscale_demo_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["demo", "--particles", "3", "--output", "unused"]) == 2
+    err = capsys.readouterr().err
+    assert "grainscale demo: error: HopperCase.particles must be at least 10, got 3" in err

@@ -479,24 +479,27 @@ def case_from_args(args: argparse.Namespace) -> HopperCase:
     return HopperCase(particles=particles, duration=duration, seed=args.seed, **extra)
 
 
+DESCRIPTION = "Fill a conical hopper (read from an STL file) and discharge it (grainscale demo)."
+
+
+def run_from_args(args: argparse.Namespace) -> HopperResult | None:
+    """What the parsed options (see :func:`add_arguments`) ask for: write the STL and stop
+    (``--write-stl``, None), or run the demo. Raises ValueError for a bad case."""
+    if args.write_stl:
+        print(write_hopper_stl(args.write_stl))
+        return None
+    progress = False if args.no_progress else None
+    return run(args.output, case_from_args(args), stl=args.stl, progress=progress)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m grainscale.examples.hopper_demo",
-        description="Fill a conical hopper (read from an STL file) and discharge it "
-        "(grainscale demo).",
+        prog="python -m grainscale.examples.hopper_demo", description=DESCRIPTION
     )
     add_arguments(parser)
     args = parser.parse_args(argv)
-    if args.write_stl:
-        print(write_hopper_stl(args.write_stl))
-        return 0
     try:
-        run(
-            args.output,
-            case_from_args(args),
-            stl=args.stl,
-            progress=False if args.no_progress else None,
-        )
+        run_from_args(args)
     except ValueError as err:
         parser.error(str(err))
     return 0
