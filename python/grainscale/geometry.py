@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _core
 from ._validate import non_negative, positive, vector3
 from .materials import Material
 
@@ -53,6 +54,10 @@ class Box:
         """Boolean mask of the points inside the closed box."""
         p = np.asarray(points, dtype=float)
         return np.all((p >= self.lo) & (p <= self.hi), axis=-1)
+
+    def _to_core(self, owner: str) -> _core.Region:
+        """The core's region (package-internal; ``owner`` names the box in errors)."""
+        return _core.Region.box(self.lo, self.hi)
 
 
 @dataclass(frozen=True)
@@ -173,6 +178,16 @@ class Cylinder:
             inside &= (h >= 0) & (h <= self.length)
         return inside
 
+    def _to_core(self, owner: str) -> _core.Region:
+        """The core's region of the finite cylinder (package-internal; ``owner`` names it in
+        errors)."""
+        if self.length is None:
+            raise ValueError(
+                f"{owner}.region must be a finite Cylinder (length in m), got length=None"
+            )
+        centre = np.asarray(self.point) + 0.5 * self.length * np.asarray(self.axis)
+        return _core.Region.cylinder(tuple(centre), self.axis, self.radius, self.length)
+
 
 @dataclass(frozen=True)
 class Mesh:
@@ -256,6 +271,11 @@ class Mesh:
         out = stl_mesh.Mesh(np.zeros(len(self.triangles), dtype=stl_mesh.Mesh.dtype))
         out.vectors[:] = self.vertices[self.triangles]
         out.save(os.fspath(path))
+
+    def _to_core(self, owner: str) -> _core.Region:
+        """The core's region inside the closed mesh (package-internal; refused with an error
+        naming ``owner`` unless the mesh is closed)."""
+        return _core.Region.mesh(self.vertices, self.triangles, f"{owner}.region (Mesh)")
 
 
 @dataclass(frozen=True)

@@ -66,7 +66,6 @@ from ._validate import positive
 from .coupling import Coupling, StressBoundary, rest_speed
 from .dist import Distribution
 from .geometry import Box
-from .insert import _core_region
 from .levels import (
     CELL_PARENT_DIAMETERS,
     MIN_CELL_CHILD_DIAMETERS,
@@ -245,19 +244,25 @@ class Hierarchy:
         d_parent, d_child = 2 * self.sizes[parent].max_radius, 2 * self.sizes[k].max_radius
         owner = f"Hierarchy.levels[{k}].exchange.cell_size"
         lowest = max(MIN_CELL_PARENT_DIAMETERS * d_parent, MIN_CELL_CHILD_DIAMETERS * d_child)
-        region = _core_region(self.levels[k].region, f"Hierarchy.levels[{k}]", allow_mesh=True)
+        spec = self.levels[k].region
+        assert spec is not None  # a child level has a region (checked in __init__)
+        region = spec._to_core(f"Hierarchy.levels[{k}]")
 
         def interface(cell: float) -> _core.Interface:
+            # the parent's largest particle mass (kg): the dead band of the faces' ledgers
+            parcel = (
+                float(self.material.density) * 4 / 3 * math.pi * self.sizes[parent].max_radius ** 3
+            )
             itf = _core.Interface(
-                region,
-                float(cell),
-                psim._level,
-                self.sizes[k]._to_core(),
-                float(self.material.density),
-                csim.material_index(self.material),
-                float(self.levels[parent].cg / self.levels[k].cg),
-                float(self.material.density) * 4 / 3 * math.pi * self.sizes[parent].max_radius ** 3,
-                seed,
+                region=region,
+                cell_size=float(cell),
+                parent=psim._level,
+                fine_radius=self.sizes[k]._to_core(),
+                fine_density=float(self.material.density),
+                fine_material=csim.material_index(self.material),
+                size_ratio=float(self.levels[parent].cg / self.levels[k].cg),
+                deadband=parcel,
+                seed=seed,
             )
             across = cells_across(itf.grid())
             if across is not None:

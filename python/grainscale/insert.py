@@ -66,19 +66,9 @@ Region = Box | Cylinder
 
 def _core_region(region: Any, owner: str, allow_mesh: bool = False) -> _core.Region:
     """The core's region for a gs.Box, a finite gs.geometry.Cylinder or (allow_mesh) the
-    interior of a closed gs.geometry.Mesh."""
-    if allow_mesh and isinstance(region, Mesh):
-        return _core.Region.mesh(region.vertices, region.triangles, f"{owner}.region (Mesh)")
-    if isinstance(region, Box):
-        return _core.Region.box(region.lo, region.hi)
-    if isinstance(region, Cylinder):
-        if region.length is None:
-            raise ValueError(
-                f"{owner}.region must be a finite Cylinder (length in m), got length=None"
-            )
-        axis = np.asarray(region.axis)
-        centre = np.asarray(region.point) + 0.5 * region.length * axis
-        return _core.Region.cylinder(tuple(centre), region.axis, region.radius, region.length)
+    interior of a closed gs.geometry.Mesh; anything else is refused naming ``owner``."""
+    if isinstance(region, Box | Cylinder) or (allow_mesh and isinstance(region, Mesh)):
+        return region._to_core(owner)
     kinds = (
         "grainscale.Box, grainscale.geometry.Cylinder or a closed grainscale.geometry.Mesh"
         if allow_mesh

@@ -15,7 +15,7 @@ from . import scaling
 from ._validate import non_negative, positive
 from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
-from .insert import Pack, Stream, _core_region
+from .insert import Pack, Stream
 from .materials import Material
 
 Region = Box | Cylinder | Mesh
@@ -179,7 +179,7 @@ class Level:
 def _bounds(region: Region | None, domain: Box) -> tuple[np.ndarray, np.ndarray]:
     if region is None:
         return np.asarray(domain.lo, float), np.asarray(domain.hi, float)
-    lo, hi = _core_region(region, "Level", allow_mesh=True).bounds()
+    lo, hi = region._to_core("Level").bounds()
     return np.asarray(lo, float), np.asarray(hi, float)
 
 
