@@ -67,13 +67,13 @@ bench-cpp: install
 	./build/bench/bench_neighbor_build
 
 lint: install
-	$(VENV)/bin/ruff check python tests bench
-	$(VENV)/bin/ruff format --check python tests bench
+	$(VENV)/bin/ruff check python tests bench studies
+	$(VENV)/bin/ruff format --check python tests bench studies
 	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 format: install
-	$(VENV)/bin/ruff format python tests bench
-	$(VENV)/bin/ruff check --fix python tests bench
+	$(VENV)/bin/ruff format python tests bench studies
+	$(VENV)/bin/ruff check --fix python tests bench studies
 	$(VENV)/bin/clang-format -i $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 clean:

@@ -6,7 +6,8 @@ h. By exact scaling in 2-D the average contact force per unit thickness scales a
 35), so the gradient G of average contact force vs axial strain should be h G(1); they report
 err = |G_theory - G_mean| / G_theory (eq. 36) of about 2 % at h = 2 rising to about 3 % at h = 4.
 
-Run it with ``python -m grainscale.examples.biaxial --output out/biaxial``. For each h and each
+Run it from the repository root with ``.venv/bin/python -m studies.biaxial.biaxial --output
+out/biaxial``. For each h and each
 sample (seed) a specimen is packed, compacted to the confining stress and loaded (see
 biaxial_run.py); the h = 1 ensemble gives G_theory(h) = h mean(G_1). Per h the report gives the
 mean gradient, err, the spread (std) of the per-sample relative deviation G_i/G_theory - 1 and
@@ -287,7 +288,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     case = BiaxialCase(law=args.law, max_strain=args.max_strain)
     given = list(sys.argv[1:] if argv is None else argv)
-    command = " ".join(["python -m grainscale.examples.biaxial", *given])
+    command = " ".join(["python -m studies.biaxial.biaxial", *given])
     if args.reanalyse:
         saved = json.loads((out / "results.json").read_text())
         runs, wall = saved["runs"], saved["wall_seconds"]

@@ -1,4 +1,4 @@
-"""Reduced biaxial CG study (CASES.md E2; the full one is grainscale.examples.biaxial).
+"""Reduced biaxial CG study (CASES.md E2; the full one is studies/biaxial).
 
 Small 2-D specimens (18 x 36 mm: about 660 discs at h = 1, 170 at h = 2, 9 diameters wide),
 three random samples per scale, loaded to 0.4 % axial strain. Checks: the lateral servo holds
@@ -9,7 +9,7 @@ spread about 8 % at both h, so the difference of two means of three has a standa
 about 7 %; measured -7 %; the 3-D rule k_n x h would double the h = 2 contact stiffness); the
 deviator-stress slope, a stress per unit thickness and so invariant, within 20 % (these h = 2
 specimens, 9 diameters wide, are looser near the walls: measured -14 %; the full study in
-docs/studies/biaxial has larger specimens). About 25 s on one core.
+studies/biaxial has larger specimens). About 25 s on one core.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from grainscale.examples.biaxial import analyse
-from grainscale.examples.biaxial_run import BiaxialCase, run_sample
+from studies.biaxial.biaxial import analyse
+from studies.biaxial.biaxial_run import BiaxialCase, run_sample
 
 CASE = BiaxialCase(width=0.018, height=0.036, max_strain=0.004, records=20)
 SEEDS = (1, 2, 3)
