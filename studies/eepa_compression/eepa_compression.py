@@ -9,14 +9,14 @@ contact stiffnesses scale with the particle size (k ~ R) and the adhesive force 
 times larger particles (h = 1.5, 2 by default), each with several packing seeds; the reference
 powder also in dies shrunk by 1/h (the die-to-particle ratio D/d of each coarse scale, the one
 geometric similarity the cg scheme cannot keep in a fixed die); and a negative control at the
-largest h with f0 not scaled. Each run (see :mod:`grainscale.examples.eepa_uniaxial`): a
+largest h with f0 not scaled. Each run (see :mod:`studies.eepa_compression.eepa_uniaxial`): a
 random packing compacted without gravity, friction or cohesion in a 40 mm die, confined
 compression to sigma_pre = 10 kPa and unloading, die removed, unconfined compression to
 failure. Options: the base powder's radius (``--radius-mm``, default 1 mm, D/d = 20; the
 CASES.md base is 0.5 mm), a lubricated die (``--lubricated-die``: frictionless, non-adhesive
 wall), fewer seeds for the costly base runs (``--base-seeds``).
 
-Run it with ``python -m grainscale.examples.eepa_compression --output out/eepa`` (one process;
+Run it with ``python -m studies.eepa_compression.eepa_compression --output out/eepa`` (one process;
 every run is saved in ``out/eepa/runs`` as it finishes and reused, so the study can be resumed).
 Compared between groups of seeds: the loading curve sigma(eps) (L1-relative difference,
 CASES.md section 0, of the seed-mean curves), the unloading stiffness (secant over the first
@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from grainscale.examples import eepa_analysis as ea
-from grainscale.examples import eepa_uniaxial as eu
+from studies.eepa_compression import eepa_analysis as ea
+from studies.eepa_compression import eepa_uniaxial as eu
 
 TOLERANCE = 0.05  # agreement claimed by Thakur et al. 2016 and gated by CASES.md E3
 

@@ -1,6 +1,6 @@
 """One uniaxial test of an EEPA powder in a cylindrical die, at one particle scale.
 
-Used by :mod:`grainscale.examples.eepa_compression` (validation/CASES.md E3, Thakur, Ooi &
+Used by :mod:`studies.eepa_compression.eepa_compression` (validation/CASES.md E3, Thakur, Ooi &
 Ahmadian 2016, Powder Technol. 293:130). Stages:
 
 1. sample preparation from a loose random packing (volume fraction ``loose_fraction``):
@@ -21,7 +21,7 @@ Ahmadian 2016, Powder Technol. 293:130). Stages:
    axial stress;
 3. the die is lifted clear of the sample in one step (its contacts vanish at once, as if it were
    removed) and the sample rests briefly;
-4. unconfined compression to failure (see :mod:`grainscale.examples.eepa_analysis` for the
+4. unconfined compression to failure (see :mod:`studies.eepa_compression.eepa_analysis` for the
    strength).
 
 The parameters of a scale come only from :func:`grainscale.scaling.scale` applied to the

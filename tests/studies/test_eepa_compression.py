@@ -1,7 +1,7 @@
 """EEPA coarse graining in uniaxial compression (validation/CASES.md E3), reduced.
 
-The full study is ``python -m grainscale.examples.eepa_compression`` (40 mm die, h = 1, 1.5, 2,
-three seeds each, report in docs/studies/eepa_compression/). Here, one seed, in one process: the
+The full study is ``python -m studies.eepa_compression.eepa_compression`` (40 mm die, h = 1, 1.5, 2,
+three seeds each, report in studies/eepa_compression/). Here, one seed, in one process: the
 cg-scaled powder at h = 2 (d = 4 mm, about 670 particles) in the 40 mm die against the reference
 powder (d = 2 mm) in a 20 mm die with gravity x 2 and hold/rest times / 2, i.e. the same
 die-to-particle ratio D/d = 10 and the same weight stress, Froude, Bond and inertial numbers,
@@ -27,10 +27,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from grainscale.examples import eepa_analysis as ea
-from grainscale.examples import eepa_compression as ec
-from grainscale.examples import eepa_uniaxial as eu
 from grainscale.scaling import build_simulation
+from studies.eepa_compression import eepa_analysis as ea
+from studies.eepa_compression import eepa_compression as ec
+from studies.eepa_compression import eepa_uniaxial as eu
 
 CASE = eu.Case()  # the study's 40 mm die, for the coarse run (h = 2)
 JOBS = [ec.Job(1.0, geometry=0.5), ec.Job(2.0), ec.Job(2.0, control=True)]
