@@ -2,7 +2,7 @@
 
 Runs four cases and prints, per case, the SHA-256 of the arrays it ends with (particles sorted by
 id, float64 bytes as computed): the settle case (20 000 spheres, 2000 steps), the hopper demo
-(``--quick``: its history and its last particle file), and the quick MLCG silo as 2 -> 1 and
+(``--quick``: its history and its last particle snapshot), and the quick MLCG silo as 2 -> 1 and
 4 -> 2 -> 1 (each level's particles, the discharge history, the books). Run it before and after
 a redesign on the same machine and build; equal lines mean identical results bit for bit (a
 different compiler or flags may change the last bits of every case)::
@@ -62,8 +62,9 @@ def hopper() -> str:
         args = argparse.Namespace(quick=True, particles=None, duration=None, seed=1)
         r = hopper_demo.run(tmp, hopper_demo.case_from_args(args), progress=False, verbose=False)
         files = {"history": r.history.read_bytes()}
-        vtus = sorted(Path(tmp).rglob("*.vtu"))
-        files["last_snapshot"] = vtus[-1].read_bytes() if vtus else b""
+        # particles_<step>.vtp, the step zero-padded: the last in name order is the last written
+        snapshots = sorted(Path(tmp).glob("particles_[0-9]*.vtp"))
+        files["last_snapshot"] = snapshots[-1].read_bytes()
         return digest({k: np.frombuffer(v, np.uint8) for k, v in files.items()})
 
 

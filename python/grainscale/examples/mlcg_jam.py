@@ -61,7 +61,6 @@ QUICK = dataclasses.replace(JAM, region_width=2.5, region_top=1.25)
 QUICK = dataclasses.replace(QUICK, fill_mass=0.09, settle=0.15, discharge=0.3, transient=0.06)
 
 PARENT_DIAMETER = 2 * 2 * 1.05e-3  # h = 2, the largest parcel (m)
-CELL_DIAMETERS = CELL_PARENT_DIAMETERS  # the default exchange cell
 
 
 def _run(case: silo.SiloCase, name: str) -> silo.Run:
@@ -106,9 +105,7 @@ def study(
             c = dataclasses.replace(case, seed=seed, region_width=width, region_top=top)
             tasks.append((f"region {width:g} x {top:g}", c, "mlcg"))
     done = _run_all(tasks, jobs)
-    per_seed: dict[str, list[silo.Run]] = {}
-    for name in runs:
-        per_seed[name] = done[name]
+    per_seed = {name: done[name] for name in runs}
     sweep = []
     for size in cell_sizes:
         rs = done[f"cells {size:g}"]
@@ -266,7 +263,8 @@ def report(case: silo.SiloCase, s: dict[str, Any]) -> str:
         lines += ["", "| exchange cells (parent diameters) | edge asked (mm) | W per seed (g/s) | "
                   "W / W_resolved | parent / child outflow |", "|---|---|---|---|---|"]  # fmt: skip
         if "mlcg" in s["runs"]:  # the case's own run: the default cells
-            size = f"{CELL_DIAMETERS:g} (default) | {CELL_DIAMETERS * PARENT_DIAMETER * 1e3:.2f}"
+            default = CELL_PARENT_DIAMETERS
+            size = f"{default:g} (default) | {default * PARENT_DIAMETER * 1e3:.2f}"
             lines.append(_case_row(size, s["runs"]["mlcg"]))
         for c in (c for c in s["cell_sizes"] if "cell_diameters" in c):
             size = f"{c['cell_diameters']:g} | {c['cell_size'] * 1e3:.2f}"
