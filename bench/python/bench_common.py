@@ -23,6 +23,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
+# The studies (studies/, outside the wheel) import from the repository root.
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
 CODES = ("grainscale", "liggghts")
 
 LOOP_RE = re.compile(

@@ -23,6 +23,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import bench_common  # noqa: F401  (puts the repository root, for the studies, on the path)
 import numpy as np
 from settle_case import SettleCase, initial_state
 from settle_grainscale_worker import settle_simulation
@@ -69,7 +70,7 @@ def hopper() -> str:
 
 
 def mlcg(levels: tuple[float, ...]) -> str:
-    from grainscale.examples import mlcg_silo
+    from studies.mlcg_silo import mlcg_silo
 
     r = mlcg_silo.run_mlcg(mlcg_silo.QUICK, levels, None)
     arrays: dict[str, Any] = {"history": np.asarray(r.history, float)}

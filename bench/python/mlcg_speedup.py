@@ -1,6 +1,6 @@
 """Wall-clock of the MLCG silo, fully resolved against multi-level (issue 7's performance target).
 
-The case is ``grainscale.examples.mlcg_silo``'s SiloCase (CASES.md F1/D1: square silo, orifice
+The case is ``studies.mlcg_silo.mlcg_silo``'s SiloCase (CASES.md F1/D1: square silo, orifice
 D0 = 10 d, filled by a stream, settled, discharged): the resolved run (h = 1 everywhere) and the
 hierarchies (h = 2 everywhere, h = 1 in a box around the orifice; with ``--levels 4 2 1`` the
 three-level chain). The target: the speed-up in wall-clock per simulated second of the
@@ -27,7 +27,7 @@ from typing import Any
 
 from bench_common import write_results
 
-from grainscale.examples import mlcg_silo
+from studies.mlcg_silo import mlcg_silo
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_OUTPUT = REPO / "bench" / "results" / "mlcg_speedup.json"

@@ -63,9 +63,9 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
     ranks = {
         "ranks": sim.ranks,
         "particles_per_rank": sim.decomposition()["counts"],
-        "ghosts_per_rank": gather_all(sim, int(sim._level.num_ghosts)),
-        "halo_seconds_per_rank": gather_all(sim, float(sim._level.halo_seconds)),
-        "rebuilds": int(sim._level.rebuilds),
+        "ghosts_per_rank": gather_all(sim, int(sim.engine.diagnostics()["ghosts"])),
+        "halo_seconds_per_rank": gather_all(sim, float(sim.engine.diagnostics()["halo_seconds"])),
+        "rebuilds": int(sim.engine.diagnostics()["rebuilds"]),
     }
     return ranks | {
         "version": getattr(gs, "__version__", "unknown"),

@@ -1,6 +1,6 @@
 """Wall-clock of one silo discharge, resolved and coarse-grained (h = 1, 2, 3).
 
-The case is one run of ``grainscale.examples.silo_discharge.run_orifice`` with the study's
+The case is one run of ``studies.silo_discharge.silo_discharge.run_orifice`` with the study's
 SiloCase (validation/CASES.md D1: constant-head silo, D_s = max(2.5 D0, D0 + 20 d), bed
 max(0.5 D_s, 2 D0) deep, spheres d = 4 mm, fill by pouring, settle, discharge over the
 measuring window) at one orifice (default D0 = 40 mm), with ``SiloCase.cg = h``: the parcels'
@@ -32,7 +32,7 @@ from typing import Any
 
 from bench_common import write_results
 
-from grainscale.examples import silo_case, silo_run
+from studies.silo_discharge import silo_case, silo_run
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_OUTPUT = REPO / "bench" / "results" / "silo_cg.json"

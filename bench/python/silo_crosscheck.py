@@ -1,7 +1,7 @@
 """Cross-check of the silo discharge rate: grainscale against LIGGGHTS 3.8 from the same bed.
 
 Question: is the discharge rate's growth with the orifice diameter D0 (the free Beverloo
-exponent of the silo study, docs/studies/silo_discharge/NOTES.md) a property of the contact
+exponent of the silo study, studies/silo_discharge/NOTES.md) a property of the contact
 physics, or something of grainscale's? Both codes discharge the same settled bed and the ratio
 W(D0_a) / W(D0_b) is compared.
 
@@ -54,7 +54,7 @@ from hopper_case import write_binary_stl, write_granular_data
 from settle_case import liggghts_preamble
 
 import grainscale as gs
-from grainscale.examples import silo_beverloo, silo_case, silo_run
+from studies.silo_discharge import silo_beverloo, silo_case, silo_run
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "silo_crosscheck.json"
 

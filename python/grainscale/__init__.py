@@ -10,6 +10,7 @@ from . import contact, dist, fields, geometry, insert, io, parallel, scaling, ti
 from .geometry import Box, Plane, Rectangle
 from .hierarchy import Exchange, Hierarchy, Level
 from .materials import Material
+from .sim_walls import WallHandle, WallMotion
 from .simulation import ParticleView, Simulation
 
 __version__ = "0.1.0"
@@ -24,6 +25,8 @@ __all__ = [
     "Plane",
     "Rectangle",
     "Simulation",
+    "WallHandle",
+    "WallMotion",
     "contact",
     "dist",
     "fields",

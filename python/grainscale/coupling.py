@@ -34,7 +34,7 @@ from . import _core
 # exceed what that material carries. A face's push totals pressure x area whatever its layer's
 # packing (cpp/coupling/coupling_forces.hpp); before it did, a loose layer took less and the
 # controller needed a margin (2 x), at which it sat wherever the child's material flows and set
-# the rate (docs/studies/mlcg_jam/NOTES.md).
+# the rate (studies/mlcg_jam/NOTES.md).
 PRESSURE_CAP = 1.0
 # Without a coarse motion to follow, the push of a face stops for particles moving inwards faster
 # than this fraction of the free-fall speed over a fine diameter.

@@ -73,8 +73,8 @@ class CellAverages:
 
     def sample(self) -> None:
         """Adds one sample: the particles now and the contacts of the last step."""
-        self._avg.sample(self.sim._level)
+        self._avg.sample(self.sim.engine.core)
 
     def finish(self) -> dict[str, Any]:
         """The averages over the samples since the last finish (collective); starts anew."""
-        return dict(self._avg.finish(self.sim._level))
+        return dict(self._avg.finish(self.sim.engine.core))

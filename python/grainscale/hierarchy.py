@@ -57,7 +57,7 @@ import json
 import math
 import os
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -65,7 +65,6 @@ from . import _core, scaling
 from ._validate import positive
 from .coupling import Coupling, StressBoundary, rest_speed
 from .dist import Distribution
-from .geometry import Box
 from .levels import (
     CELL_PARENT_DIAMETERS,
     MIN_CELL_CHILD_DIAMETERS,
@@ -183,57 +182,34 @@ class Hierarchy:
         comm: Any,
         force_time_step: bool,
     ) -> None:
-        """Every level's parameters from the reference by the scaling scheme, its time step and
-        its Simulation."""
-        base = self.base
-        dom_lo, dom_hi = bounds[0]
-        tol = 1e-9 * float(np.max(dom_hi - dom_lo))
-        self.params: list[scaling.ParameterSet] = []
-        self.sizes: list[Distribution] = []
-        for k, lv in enumerate(self.levels):
-            scaled = scaling.scale(base, lv.cg, self.scheme).params
-            sized = scaling.scale(dataclasses.replace(base, size=size), lv.cg, self.scheme)
-            level_size = sized.params.size
-            assert level_size is not None
-            if k > 0:  # a region: no insertions, no particles, a box around the region
-                lo, hi = bounds[k]
-                margin = 4 * level_size.max_radius
-                periodic = tuple(
-                    bool(base.domain.periodic[a])
-                    and lo[a] <= dom_lo[a] + tol
-                    and hi[a] >= dom_hi[a] - tol
-                    for a in range(3)
-                )
-                scaled = dataclasses.replace(
-                    scaled,
-                    domain=Box(
-                        lo=tuple(np.maximum(lo - margin, dom_lo)),
-                        hi=tuple(np.minimum(hi + margin, dom_hi)),
-                        periodic=periodic,
-                    ),
-                    insertions=(),
-                    particles=(),
-                    materials=(*scaled.materials, material),
-                )
-            self.params.append(scaled)
-            self.sizes.append(level_size)
+        """Every level's parameters (grainscale.scaling.level_parameters), time step and
+        Simulation."""
+        reference = dataclasses.replace(self.base, size=size)
+
+        def parameters(k: int, time_step: float | None) -> scaling.ParameterSet:
+            return scaling.level_parameters(
+                reference,
+                self.levels[k].cg,
+                self.scheme,
+                region=None if k == 0 else bounds[k],
+                region_material=None if k == 0 else material,
+                time_step=time_step,
+            )
+
+        drafts = [parameters(k, None) for k in range(len(self.levels))]
+        self.sizes: list[Distribution] = [cast(Distribution, p.size) for p in drafts]
         # Time steps: the exchange interval is a whole number of steps of every level.
-        dts = [self._stable_step(p, s) for p, s in zip(self.params, self.sizes, strict=True)]
+        dts = [self._stable_step(p, s) for p, s in zip(drafts, self.sizes, strict=True)]
         every = self.exchange.every if self.exchange.every is not None else 25 * dts[0]
         self.every = float(every)
         self.steps = [max(1, math.ceil(self.every / dt * (1 - 1e-12))) for dt in dts]
-        self.sims: list[Simulation] = []
-        for k, p in enumerate(self.params):
-            p = dataclasses.replace(
-                p,
-                time_step=self.every / self.steps[k],
-                skin=p.skin if p.skin is not None else 0.2 * self.sizes[k].max_radius,
-            )
-            self.params[k] = p
-            sim = scaling.build_simulation(
+        self.params = [parameters(k, self.every / n) for k, n in enumerate(self.steps)]
+        self.sims: list[Simulation] = [
+            scaling.build_simulation(
                 p, comm=comm, quiet=True, record_contacts=True, force_time_step=force_time_step
             )
-            self.sims.append(sim)
+            for p in self.params
+        ]
 
     def _couple(self, k: int, seed: int) -> Coupling:
         """The interface of level k with its parent: exchange grid, coupling forces, region
@@ -256,7 +232,7 @@ class Hierarchy:
             itf = _core.Interface(
                 region=region,
                 cell_size=float(cell),
-                parent=psim._level,
+                parent=psim.engine.core,
                 fine_radius=self.sizes[k]._to_core(),
                 fine_density=float(self.material.density),
                 fine_material=csim.material_index(self.material),
@@ -285,9 +261,9 @@ class Hierarchy:
         c.advance.downward = c.grid["face_normal"] @ np.asarray(self.base.gravity, float) > 0
         c.advance.density = float(self.material.density)
         layer, fade = ex.layer * d_child, ex.fade * d_child
-        c.parent_coupling = int(psim._level.add_coupling(itf, layer, fade))
-        c.child_coupling = int(csim._level.add_coupling(itf, layer, fade))
-        c.region_outlet = int(csim._level.add_region_outlet(itf, 1, self.sizes[k].max_radius))
+        c.parent_coupling = psim.engine.add_coupling(itf, layer, fade)
+        c.child_coupling = csim.engine.add_coupling(itf, layer, fade)
+        c.region_outlet = csim.engine.add_region_outlet(itf, 1, self.sizes[k].max_radius)
         ki = ex.stress_integral if ex.stress_integral is not None else 1.0 / (4 * self.every)
         g = float(np.linalg.norm(self.base.gravity))
         c.stress = StressBoundary(ex.stress_gain, ki, ex.skip_ratio, rest_speed(g, d_child), c.grid)
@@ -372,7 +348,7 @@ class Hierarchy:
         """Level k's outlet removals and lost mass (kg, cumulative; the region outlets excluded:
         what leaves a region is owed back to it)."""
         sim = self.sims[k]
-        return sum(o.removed_mass for o in sim.outlets), float(sim._level.lost_mass)
+        return sum(o.removed_mass for o in sim.outlets), sim.engine.lost_mass
 
     def mass_balance(self) -> dict[str, Any]:
         """Collective: the books of the material the hierarchy represents (kg). Each level holds
@@ -457,7 +433,7 @@ class Hierarchy:
 
     def _interval(self) -> None:
         for k, sim in enumerate(self.sims):
-            level = sim._level
+            level = sim.engine.core
             children = [c for c in self.couplings if c.parent == k]
             level.clear_lost_log()
             for c in children:
@@ -487,10 +463,10 @@ class Hierarchy:
                 if c.child == k:
                     c.credit_leavers(level)
         for c in self.couplings:
-            c.parent_fields = c.interface.finish_average(self.sims[c.parent]._level, False)
-            c.child_fields = c.interface.finish_average(self.sims[c.child]._level, True)
+            c.parent_fields = c.interface.finish_average(self.sims[c.parent].engine.core, False)
+            c.child_fields = c.interface.finish_average(self.sims[c.child].engine.core, True)
             c.update_controls(self.every)
-            c.apply_controls(self.sims[c.parent]._level, self.sims[c.child]._level)
+            c.apply_controls(self.sims[c.parent].engine.core, self.sims[c.child].engine.core)
         for c in sorted(self.couplings, key=lambda c: -c.child):  # finest first: debts go up
             self._settle(c)
         self.intervals += 1
@@ -511,7 +487,7 @@ class Hierarchy:
         r = self.sizes[c.parent].max_radius
         budget = c.debt - c.exchange.max_lag * float(self.material.density) * 4 / 3 * math.pi * r**3
         if budget > 0:
-            level = self.sims[c.parent]._level
+            level = self.sims[c.parent].engine.core
             excess = c.mass_excess()
             near = tuple(c.discharge_point)
             c.paid += float(c.interface.remove_shadow(level, excess, near, budget))
@@ -589,7 +565,7 @@ class Hierarchy:
         self.intervals = int(extra["intervals"])
         for c, state in zip(self.couplings, extra["couplings"], strict=True):
             c.load(state)
-            c.apply_controls(self.sims[c.parent]._level, self.sims[c.child]._level)
+            c.apply_controls(self.sims[c.parent].engine.core, self.sims[c.child].engine.core)
         if "initial_mass" in extra:
             self.initial_mass = float(extra["initial_mass"])
         else:

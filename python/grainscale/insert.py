@@ -42,6 +42,7 @@ from .materials import Material
 from .positions import lattice, random_in_box
 
 if TYPE_CHECKING:
+    from .engine import Engine
     from .simulation import Simulation
 
 __all__ = [
@@ -231,7 +232,7 @@ class Pack:
     def _insert(self, sim: Simulation) -> np.ndarray:
         if sim.dimension == 2 and not isinstance(self.region, Box):
             raise ValueError(f"Pack.region must be a gs.Box in 2-D mode, got {self.region!r}")
-        first, n = sim._level.pack(
+        first, n = sim.engine.pack(
             _core_region(self.region, "Pack", allow_mesh=True),
             cast(Distribution, self.radius)._to_core(),
             -1 if self.count is None else int(self.count),
@@ -341,17 +342,17 @@ class Stream:
         return self.mass_rate / (self.material.density * area * speed)
 
     def _insert(self, sim: Simulation) -> StreamHandle:
-        index = sim._level.add_stream(
+        index = sim.engine.add_stream(
             self.face._to_core(),
             cast(Distribution, self.radius)._to_core(),
-            self.mass_rate,
-            sim.particle_material_index(self.material, "Stream"),
-            self.velocity,
-            self.seed,
-            sim.time if self.start is None else self.start,
-            self.stop,
-            self.every,
-            self.max_attempts,
+            mass_rate=self.mass_rate,
+            material=sim.particle_material_index(self.material, "Stream"),
+            velocity=self.velocity,
+            seed=self.seed,
+            start=sim.time if self.start is None else self.start,
+            stop=self.stop,
+            every=self.every,
+            max_attempts=self.max_attempts,
         )
         phi = self.volume_fraction
         if math.isfinite(phi) and phi > 0.3:
@@ -361,7 +362,7 @@ class Stream:
                 "larger face or a higher speed",
                 stacklevel=3,
             )
-        return StreamHandle(sim._level, int(index), self)
+        return StreamHandle(sim.engine, index, self)
 
 
 class StreamHandle:
@@ -371,45 +372,45 @@ class StreamHandle:
     by the batches so far (it leads the requested mass by at most one batch and one particle).
     """
 
-    def __init__(self, level: _core.Level, index: int, stream: Stream) -> None:
-        self._level = level
+    def __init__(self, engine: Engine, index: int, stream: Stream) -> None:
+        self._engine = engine
         self.index = index
         self.stream = stream
 
     def status(self) -> dict[str, Any]:
         """All bookkeeping values at once (see the properties), plus ``batches`` (batch times
         passed), ``interval`` (s), ``thickness`` (m) and ``direction`` (unit, into the slab)."""
-        return dict(self._level.stream_status(self.index))
+        return self._engine.stream_status(self.index)
 
     @property
     def requested_mass(self) -> float:
         """mass_rate x time elapsed since start (up to stop), kg."""
-        return float(self._level.stream_status(self.index)["requested_mass"])
+        return float(self._engine.stream_status(self.index)["requested_mass"])
 
     @property
     def inserted_mass(self) -> float:
         """Mass of the particles inserted so far, kg."""
-        return float(self._level.stream_status(self.index)["inserted_mass"])
+        return float(self._engine.stream_status(self.index)["inserted_mass"])
 
     @property
     def pending_mass(self) -> float:
         """Mass of the particles due but not placed yet (retried at the next batch), kg."""
-        return float(self._level.stream_status(self.index)["pending_mass"])
+        return float(self._engine.stream_status(self.index)["pending_mass"])
 
     @property
     def scheduled_mass(self) -> float:
         """inserted_mass + pending_mass: what the batches so far asked for, kg."""
-        return float(self._level.stream_status(self.index)["scheduled_mass"])
+        return float(self._engine.stream_status(self.index)["scheduled_mass"])
 
     @property
     def inserted_count(self) -> int:
         """Number of particles inserted so far."""
-        return int(self._level.stream_status(self.index)["inserted_count"])
+        return int(self._engine.stream_status(self.index)["inserted_count"])
 
     @property
     def pending_count(self) -> int:
         """Number of particles due but not placed yet."""
-        return int(self._level.stream_status(self.index)["pending_count"])
+        return int(self._engine.stream_status(self.index)["pending_count"])
 
     @property
     def max_radius(self) -> float:
@@ -419,11 +420,11 @@ class StreamHandle:
     @property
     def interval(self) -> float:
         """Batch interval (s)."""
-        return float(self._level.stream_status(self.index)["interval"])
+        return float(self._engine.stream_status(self.index)["interval"])
 
     def slab(self) -> _core.Region:
         """The insertion slab (core Region; ``contains(points, radius)`` tests points)."""
-        return self._level.stream_slab(self.index)
+        return self._engine.stream_slab(self.index)
 
     def __repr__(self) -> str:
         s = self.status()
@@ -460,8 +461,8 @@ class Outlet:
         object.__setattr__(self, "every", _positive_int("Outlet", "every", self.every))
 
     def _add(self, sim: Simulation) -> OutletHandle:
-        index = sim._level.add_outlet(_core_region(self.region, "Outlet"), self.every)
-        return OutletHandle(sim._level, int(index), self)
+        index = sim.engine.add_outlet(_core_region(self.region, "Outlet"), self.every)
+        return OutletHandle(sim.engine, index, self)
 
 
 class OutletHistory(NamedTuple):
@@ -475,31 +476,31 @@ class OutletHistory(NamedTuple):
 class OutletHandle:
     """Removal bookkeeping of a registered outlet."""
 
-    def __init__(self, level: _core.Level, index: int, outlet: Outlet) -> None:
-        self._level = level
+    def __init__(self, engine: Engine, index: int, outlet: Outlet) -> None:
+        self._engine = engine
         self.index = index
         self.outlet = outlet
 
     @property
     def removed_count(self) -> int:
         """Number of particles removed so far."""
-        return int(self._level.outlet_status(self.index)["removed_count"])
+        return int(self._engine.outlet_status(self.index)["removed_count"])
 
     @property
     def removed_mass(self) -> float:
         """Mass removed so far (kg)."""
-        return float(self._level.outlet_status(self.index)["removed_mass"])
+        return float(self._engine.outlet_status(self.index)["removed_mass"])
 
     @property
     def removed_moment(self) -> np.ndarray:
         """Sum of m x over the particles removed so far (kg m): their centre of mass is
         ``removed_moment / removed_mass``."""
-        return np.asarray(self._level.outlet_status(self.index)["removed_moment"], float)
+        return np.asarray(self._engine.outlet_status(self.index)["removed_moment"], float)
 
     def history(self) -> OutletHistory:
         """(time s, cumulative mass kg, cumulative number) arrays; the discharge rate is the
         slope of mass over time (e.g. ``np.polyfit(time, mass, 1)[0]`` in kg/s)."""
-        t, m, c = self._level.outlet_history(self.index)
+        t, m, c = self._engine.outlet_history(self.index)
         return OutletHistory(np.asarray(t), np.asarray(m), np.asarray(c))
 
     def __repr__(self) -> str:

@@ -42,7 +42,7 @@ class Exchange:
             diameters, 2.5 child diameters), at most what keeps those 4 (2) cells; outside it
             the hierarchy refuses the grid with a clear error. With one interior layer the
             parent's following rests on a single column of cells, and the discharge rate of
-            docs/studies/mlcg_jam fell by 20 %; across the range it holds within 5 % where the
+            studies/mlcg_jam fell by 20 %; across the range it holds within 5 % where the
             region is large enough (see Level.region).
         every: exchange interval (s); default 25 time steps of the coarsest level. The levels'
             time steps are shortened, if needed, to divide it.
@@ -153,7 +153,7 @@ class Level:
             cell deep along every interface face) are held to the parent's motion. Around an
             orifice the parent cannot pass, the parent sinks there as a plug paying the child's
             discharge, so a region whose boundary cells reach into the orifice's converging
-            flow imposes that plug on it. In docs/studies/mlcg_jam a region 2.5 orifice widths
+            flow imposes that plug on it. In studies/mlcg_jam a region 2.5 orifice widths
             wide and 1.25 high (interior cells 1.5-3 mm beyond the orifice's edge) ran up to
             8 % fast, the more so the smaller the cells and the deeper the bed; one 3 wide and
             2 high (3-6 mm beyond the edge) held the resolved rate within 5 % across the cell

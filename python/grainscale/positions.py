@@ -72,6 +72,37 @@ def _check_plane(owner: str, region: Box, plane_z: float) -> None:
         )
 
 
+def _overlaps(
+    grid: dict[tuple[int, int, int], list[int]],
+    pos: np.ndarray,
+    radii: np.ndarray,
+    c: tuple[int, int, int],
+    p: np.ndarray,
+    r: float,
+) -> bool:
+    """Whether a sphere of radius r at p overlaps a placed one (grid: placed indices by cell)."""
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dz in (-1, 0, 1):
+                for j in grid.get((c[0] + dx, c[1] + dy, c[2] + dz), ()):
+                    if np.sum((pos[j] - p) ** 2) < (r + radii[j]) ** 2:
+                        return True
+    return False
+
+
+def _too_full(region: Box, radii: np.ndarray, i: int, attempts: int, planar: bool) -> str:
+    fraction = (
+        np.sum(math.pi * radii**2) / (region.length[0] * region.length[1])
+        if planar
+        else np.sum(4 / 3 * math.pi * radii**3) / region.volume
+    )
+    return (
+        f"random_in_box could not place particle {i} (radius {radii[i]}) after {attempts} "
+        f"attempts; region too full (requested {'area' if planar else 'volume'} fraction "
+        f"{fraction:.3f})"
+    )
+
+
 def random_in_box(
     region: Box,
     radius: float | np.ndarray,
@@ -122,33 +153,10 @@ def random_in_box(
             if plane_z is not None:
                 p[2] = plane_z
             c = tuple(np.floor(p / cell).astype(int))
-            ok = True
-            for dx in (-1, 0, 1):
-                for dy in (-1, 0, 1):
-                    for dz in (-1, 0, 1):
-                        for j in grid.get((c[0] + dx, c[1] + dy, c[2] + dz), ()):
-                            if np.sum((pos[j] - p) ** 2) < (r + radii[j]) ** 2:
-                                ok = False
-                                break
-                        if not ok:
-                            break
-                    if not ok:
-                        break
-                if not ok:
-                    break
-            if ok:
+            if not _overlaps(grid, pos, radii, c, p, r):
                 pos[i] = p
                 grid.setdefault(c, []).append(int(i))
                 break
         else:
-            fraction = (
-                np.sum(math.pi * radii**2) / (region.length[0] * region.length[1])
-                if plane_z is not None
-                else np.sum(4 / 3 * math.pi * radii**3) / region.volume
-            )
-            raise RuntimeError(
-                f"random_in_box could not place particle {i} (radius {r}) after "
-                f"{max_attempts} attempts; region too full (requested "
-                f"{'area' if plane_z is not None else 'volume'} fraction {fraction:.3f})"
-            )
+            raise RuntimeError(_too_full(region, radii, i, max_attempts, plane_z is not None))
     return pos

@@ -1,11 +1,17 @@
-"""Simulation's wall set: adding walls, their prescribed motion and servo control, and what the
-particles exert on them, by wall index. A mixin of :class:`grainscale.simulation.Simulation`,
-which holds the state (``_level``, ``_walls``, ``_wall_spin``)."""
+"""Simulation's wall set: ``add_wall`` returns a :class:`WallHandle`, which reads what the
+particles exert on the wall and sets its prescribed motion and servo control.
+
+``WallMethods`` is a mixin of :class:`grainscale.simulation.Simulation`, which holds the state
+(``_level``, ``_walls``, ``_wall_spin``). The index methods of earlier releases
+(``sim.wall_force(k)``, ``sim.set_wall_motion(k, ...)``, ...) still work for this release and
+warn (DeprecationWarning); a handle also passes where an index was expected.
+"""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -16,22 +22,156 @@ from .geometry import Cylinder, Mesh, Plane, Rectangle, Servo
 if TYPE_CHECKING:
     from .materials import Material
 
+WallGeometry = Plane | Rectangle | Cylinder | Mesh
+
+
+class WallMotion(NamedTuple):
+    """A wall's prescribed motion: translation velocity (m/s) and rotation (rad/s) about
+    ``origin`` (m; also the torque reference)."""
+
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    origin: np.ndarray
+
+
+class WallHandle:
+    """A wall of a simulation, as returned by ``Simulation.add_wall``.
+
+    Example:
+        >>> import grainscale as gs
+        >>> sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)))
+        >>> floor = sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+        >>> floor.set_motion(velocity=(0, 0, 0.01))
+        >>> floor.motion.velocity.tolist()
+        [0.0, 0.0, 0.01]
+        >>> floor.force.tolist()  # N, from the particles at the last step
+        [0.0, 0.0, 0.0]
+    """
+
+    def __init__(self, sim: WallMethods, index: int, geometry: WallGeometry) -> None:
+        self._sim = sim
+        self.index = index
+        self.geometry = geometry
+
+    def __index__(self) -> int:
+        return self.index
+
+    @property
+    def force(self) -> np.ndarray:
+        """Force (N) exerted by the particles on the wall at the last step."""
+        return np.array(self._sim._level.wall_force(self.index))
+
+    @property
+    def torque(self) -> np.ndarray:
+        """Torque (N m) exerted by the particles about the wall's origin (plane point,
+        rectangle corner, cylinder axis point, mesh origin, or the origin of ``set_motion``)."""
+        return np.array(self._sim._level.wall_torque(self.index))
+
+    @property
+    def position(self) -> np.ndarray:
+        """Current reference point (m): plane point, rectangle corner, point on a cylinder's
+        axis, mesh origin (moves with the wall)."""
+        return np.array(self._sim._level.wall_point(self.index))
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Current translation velocity (m/s); a servo changes it every step."""
+        return np.array(self._sim._level.wall_velocity(self.index))
+
+    @property
+    def motion(self) -> WallMotion:
+        """The prescribed motion now (see :meth:`set_motion`)."""
+        lv, k = self._sim._level, self.index
+        spin = self._sim._wall_spin.get(k, (0.0, 0.0, 0.0))
+        return WallMotion(
+            np.array(lv.wall_velocity(k)), np.array(spin, float), np.array(lv.wall_origin(k))
+        )
+
+    def set_motion(
+        self,
+        velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+        origin: Sequence[float] | None = None,
+    ) -> None:
+        """Change the prescribed motion: translation velocity (m/s), rotation (rad/s) about
+        ``origin`` (m; also the torque reference). None keeps a value."""
+        lv, k = self._sim._level, self.index
+        now = self.motion
+        owner = "WallHandle.set_motion"
+        v = vector3(owner, "velocity", now.velocity if velocity is None else velocity)
+        spin = vector3(
+            owner,
+            "angular_velocity",
+            now.angular_velocity if angular_velocity is None else angular_velocity,
+        )
+        o = vector3(owner, "origin", now.origin if origin is None else origin)
+        lv.set_wall_motion(k, v, spin, o)
+        if angular_velocity is not None:
+            self._sim._wall_spin[k] = spin
+
+    @property
+    def servo(self) -> Servo | None:
+        """The servo control of the wall's translation (None: prescribed motion only). Setting
+        it validates it against the wall; None switches it off."""
+        return self._sim._wall_servos.get(self.index)
+
+    @servo.setter
+    def servo(self, servo: Servo | None) -> None:
+        k = self.index
+        if servo is None:
+            self._sim._level.set_wall_servo(k, False, (0.0, 0.0, 1.0), 0.0, 0.0, 0.0)
+            self._sim._wall_servos.pop(k, None)
+            return
+        if not isinstance(servo, Servo):
+            raise ValueError(f"WallHandle.servo must be a gs.Servo or None, got {servo!r}")
+        self._sim._level.set_wall_servo(
+            k,
+            True,
+            servo.direction_for(self.geometry),
+            servo.force_for(self.geometry),
+            servo.gain,
+            servo.max_speed,
+            servo.integral_gain,
+        )
+        self._sim._wall_servos[k] = servo
+
+    @property
+    def servo_integral(self) -> float:
+        """The integrated force error (N s) of the wall's PI servo (0 without one)."""
+        return float(self._sim._level.wall_servo_integral(self.index))
+
+    def __repr__(self) -> str:
+        return f"WallHandle(index={self.index}, {type(self.geometry).__name__})"
+
+
+def _deprecated(old: str, new: str) -> None:
+    warnings.warn(
+        f"Simulation.{old} is deprecated and will be removed in the next release; use the "
+        f"handle that add_wall returns: {new}",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+
 
 class WallMethods:
     """The wall methods of a Simulation (see the module docstring)."""
 
     _level: _core.Level
-    _walls: list[Plane | Rectangle | Cylinder | Mesh]
+    _walls: list[WallHandle]
     _wall_spin: dict[int, tuple[float, float, float]]
+    _wall_servos: dict[int, Servo]
 
     if TYPE_CHECKING:
 
         def material_index(self, material: Material) -> int: ...
 
-    def add_wall(
-        self, wall: Plane | Rectangle | Cylinder | Mesh, servo: Servo | None = None
-    ) -> int:
-        """Add a wall; returns its index (for wall_force, wall_torque, set_wall_motion).
+    @property
+    def walls(self) -> list[WallHandle]:
+        """The walls, in the order they were added."""
+        return list(self._walls)
+
+    def add_wall(self, wall: WallGeometry, servo: Servo | None = None) -> WallHandle:
+        """Add a wall; returns its handle (force, torque, position, motion, servo).
 
         Args:
             wall: Plane, Rectangle, Cylinder or Mesh.
@@ -42,6 +182,7 @@ class WallMethods:
         if servo is not None:  # validate before the wall exists
             servo.force_for(wall)
             servo.direction_for(wall)
+        spin_origin = None
         if isinstance(wall, Plane):
             k = lv.add_plane_wall(wall.point, wall.normal, wall.velocity, mat)
         elif isinstance(wall, Rectangle):
@@ -51,110 +192,84 @@ class WallMethods:
             k = lv.add_cylinder_wall(
                 wall.point, wall.axis, wall.radius, length, wall.inside, wall.velocity, mat
             )
-            if any(wall.angular_velocity):
-                lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, wall.point)
-                self._wall_spin[int(k)] = wall.angular_velocity
+            spin_origin = wall.point
         elif isinstance(wall, Mesh):
             k = lv.add_mesh_wall(wall.vertices, wall.triangles, wall.origin, wall.velocity, mat)
-            if any(wall.angular_velocity):
-                lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, wall.origin)
-                self._wall_spin[int(k)] = wall.angular_velocity
+            spin_origin = wall.origin
         else:
             raise ValueError(
                 f"add_wall.wall must be a Plane, Rectangle, Cylinder or Mesh, got {wall!r}"
             )
-        self._walls.append(wall)
+        handle = WallHandle(self, int(k), wall)
+        if spin_origin is not None and any(wall.angular_velocity):
+            lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, spin_origin)
+            self._wall_spin[int(k)] = wall.angular_velocity
+        self._walls.append(handle)
         if servo is not None:
-            self.set_wall_servo(int(k), servo)
-        return int(k)
-
-    def set_wall_motion(
-        self,
-        index: int,
-        velocity: Sequence[float] | None = None,
-        angular_velocity: Sequence[float] | None = None,
-        origin: Sequence[float] | None = None,
-    ) -> None:
-        """Change a wall's prescribed motion: translation velocity (m/s) and rotation
-        (rad/s) about ``origin`` (m; also the torque reference). None keeps a value."""
-        lv, k = self._level, self._wall_index(index)
-        lv.set_wall_motion(
-            k,
-            vector3(
-                "set_wall_motion", "velocity", lv.wall_velocity(k) if velocity is None else velocity
-            ),
-            vector3(
-                "set_wall_motion",
-                "angular_velocity",
-                self._wall_spin.get(k, (0.0, 0.0, 0.0))
-                if angular_velocity is None
-                else angular_velocity,
-            ),
-            vector3("set_wall_motion", "origin", lv.wall_origin(k) if origin is None else origin),
-        )
-        if angular_velocity is not None:
-            self._wall_spin[k] = vector3("set_wall_motion", "angular_velocity", angular_velocity)
-
-    def set_wall_servo(self, index: int, servo: Servo | None) -> None:
-        """Put a wall under servo control (None switches it off)."""
-        k = self._wall_index(index)
-        if servo is None:
-            self._level.set_wall_servo(k, False, (0.0, 0.0, 1.0), 0.0, 0.0, 0.0)
-            return
-        wall = self._walls[k]
-        self._level.set_wall_servo(
-            k,
-            True,
-            servo.direction_for(wall),
-            servo.force_for(wall),
-            servo.gain,
-            servo.max_speed,
-            servo.integral_gain,
-        )
-
-    def wall_servo_integral(self, index: int) -> float:
-        """The integrated force error (N s) of wall ``index``'s PI servo (0 without one)."""
-        return float(self._level.wall_servo_integral(self._wall_index(index)))
-
-    def wall_velocity(self, index: int) -> np.ndarray:
-        """Current translation velocity (m/s) of wall ``index`` (servo walls change it)."""
-        return np.array(self._level.wall_velocity(self._wall_index(index)))
+            handle.servo = servo
+        return handle
 
     def mesh_walls(self) -> list[dict[str, Any]]:
         """Current geometry of the mesh walls: index, vertices, triangles, moving (for output)."""
         out = []
-        for k, wall in enumerate(self._walls):
-            if isinstance(wall, Mesh):
+        for w in self._walls:
+            if isinstance(w.geometry, Mesh):
+                k = w.index
                 moving = bool(
                     np.any(self._level.wall_velocity(k))
-                    or any(self._wall_spin.get(k, wall.angular_velocity))
+                    or any(self._wall_spin.get(k, w.geometry.angular_velocity))
                 )
                 out.append(
                     {
                         "index": k,
                         "vertices": np.asarray(self._level.wall_vertices(k)),
-                        "triangles": wall.triangles,
+                        "triangles": w.geometry.triangles,
                         "moving": moving,
                     }
                 )
         return out
 
-    def wall_force(self, index: int) -> np.ndarray:
-        """Force (N) exerted by the particles on wall ``index`` at the last step."""
-        return np.array(self._level.wall_force(self._wall_index(index)))
+    # --------------------------------------------- deprecated index methods (one release)
+    def set_wall_motion(
+        self,
+        index: int | WallHandle,
+        velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+        origin: Sequence[float] | None = None,
+    ) -> None:
+        """Deprecated: ``wall.set_motion(velocity, angular_velocity, origin)``."""
+        _deprecated("set_wall_motion(index, ...)", "wall.set_motion(...)")
+        self._wall(index).set_motion(velocity, angular_velocity, origin)
 
-    def wall_torque(self, index: int) -> np.ndarray:
-        """Torque (N m) exerted by the particles on wall ``index`` about its origin (plane point,
-        rectangle corner, cylinder axis point, mesh origin, or the origin set by
-        set_wall_motion)."""
-        return np.array(self._level.wall_torque(self._wall_index(index)))
+    def set_wall_servo(self, index: int | WallHandle, servo: Servo | None) -> None:
+        """Deprecated: ``wall.servo = servo``."""
+        _deprecated("set_wall_servo(index, servo)", "wall.servo = servo")
+        self._wall(index).servo = servo
 
-    def wall_position(self, index: int) -> np.ndarray:
-        """Current reference point (m) of wall ``index``: plane point, rectangle corner, point on
-        a cylinder's axis (moves with the wall)."""
-        return np.array(self._level.wall_point(self._wall_index(index)))
-
-    def _wall_index(self, index: int) -> int:
-        if not 0 <= index < len(self._walls):
+    def _wall(self, index: int | WallHandle) -> WallHandle:
+        k = int(index.index if isinstance(index, WallHandle) else index)
+        if not 0 <= k < len(self._walls):
             raise ValueError(f"wall index must be in [0, {len(self._walls)}), got {index}")
-        return index
+        return self._walls[k]
+
+
+def _deprecated_reader(attribute: str, unit: str) -> Any:
+    """Simulation.wall_<attribute>(index) of earlier releases: warns, reads the handle."""
+
+    def read(self: WallMethods, index: int | WallHandle) -> Any:
+        _deprecated(f"wall_{attribute}(index)", f"wall.{attribute}")
+        return getattr(self._wall(index), attribute)
+
+    read.__name__ = f"wall_{attribute}"
+    read.__doc__ = f"Deprecated: ``wall.{attribute}`` ({unit})."
+    return read
+
+
+for _attribute, _unit in (
+    ("force", "N"),
+    ("torque", "N m"),
+    ("position", "m"),
+    ("velocity", "m/s"),
+    ("servo_integral", "N s"),
+):
+    setattr(WallMethods, f"wall_{_attribute}", _deprecated_reader(_attribute, _unit))

@@ -19,13 +19,14 @@ import numpy as np
 from . import _core, parallel
 from ._validate import positive, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
-from .geometry import Box, Cylinder, Mesh, Plane, Rectangle
+from .engine import Engine
+from .geometry import Box, Servo
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
 from .sim_checkpoint import CheckpointMethods
 from .sim_ranks import RankMethods
-from .sim_walls import WallMethods
+from .sim_walls import WallHandle, WallMethods
 
 
 class Output(Protocol):
@@ -100,6 +101,9 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         handle = None if self._comm is None else int(self._comm.py2f())
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic, handle)
         self._level.set_dimension(int(dimension))
+        # the package's modules (insertion, checkpoints, fields, hierarchies) use this, never
+        # _level (package-internal; grainscale/engine.py)
+        self.engine = Engine(self._level)
         if processor_grid is not None:
             grid = tuple(processor_grid)
             if len(grid) != 3 or not all(isinstance(g, int) and g >= 1 for g in grid):
@@ -135,8 +139,9 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         self._level.record_contacts = bool(record_contacts)
         self.thermo_log: list[dict[str, float]] = []
         self._outputs: list[tuple[Output, int]] = []
-        self._walls: list[Plane | Rectangle | Cylinder | Mesh] = []
+        self._walls: list[WallHandle] = []
         self._wall_spin: dict[int, tuple[float, float, float]] = {}
+        self._wall_servos: dict[int, Servo] = {}
         self._header_printed = False
         self._rate_clock = (_time.perf_counter(), 0)
         self._chunk = 1  # steps per C++ call in run(), adapted to the step cost
@@ -479,17 +484,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             )
         self._resolve_defaults()
         dt = float(self._time_step)  # type: ignore[arg-type]
-        if steps is not None:
-            if int(steps) != steps or steps < 0:
-                raise ValueError(
-                    f"Simulation.run.steps must be a non-negative integer, got {steps!r}"
-                )
-            target = self.step + int(steps)
-        else:
-            u = float(until)  # type: ignore[arg-type]
-            if not math.isfinite(u):
-                raise ValueError(f"Simulation.run.until must be finite (s), got {until!r}")
-            target = self.step + max(0, math.ceil((u - self.time) / dt * (1 - 1e-12)))
+        target = self._target_step(steps, until, dt)
         if progress is None:
             progress = sys.stderr.isatty() and not os.environ.get("CI")
         progress = progress and self.rank == 0
@@ -513,17 +508,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 stats = n == stop - self.step
                 t0 = _time.perf_counter()
                 self._level.run(n, stats)
-                elapsed = _time.perf_counter() - t0
-                # Chunks of 0.25-1 s (the size carries over to the next run): Ctrl-C and the bar
-                # stay responsive, and the cost of a chunk boundary (statistics, a separate
-                # closing kick) is spread over many steps. Under MPI every rank must take the
-                # same chunks: rank 0's timing decides.
-                if self._comm is not None:
-                    elapsed = self._comm.bcast(elapsed, root=0)
-                if elapsed < 0.25 and n == self._chunk:
-                    self._chunk = min(2 * self._chunk, 100000)
-                elif elapsed > 1.0 and self._chunk > 1:
-                    self._chunk //= 2
+                self._adapt_chunk(n, _time.perf_counter() - t0)
                 if bar is not None:
                     bar.update(n)
                 # Outputs, then thermo (its reductions are collective): each step agreed on.
@@ -535,6 +520,31 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 bar.close()
         if not self.thermo_log or self.thermo_log[-1]["step"] != self.step:
             self._log_thermo(print_line=False)
+
+    def _target_step(self, steps: int | None, until: float | None, dt: float) -> int:
+        """The step a run of ``steps`` steps or up to time ``until`` ends at."""
+        if steps is not None:
+            if int(steps) != steps or steps < 0:
+                raise ValueError(
+                    f"Simulation.run.steps must be a non-negative integer, got {steps!r}"
+                )
+            return self.step + int(steps)
+        u = float(until)  # type: ignore[arg-type]
+        if not math.isfinite(u):
+            raise ValueError(f"Simulation.run.until must be finite (s), got {until!r}")
+        return self.step + max(0, math.ceil((u - self.time) / dt * (1 - 1e-12)))
+
+    def _adapt_chunk(self, n: int, elapsed: float) -> None:
+        """Chunks of 0.25-1 s (the size carries over to the next run): Ctrl-C and the bar stay
+        responsive, and the cost of a chunk boundary (statistics, a separate closing kick) is
+        spread over many steps. Under MPI every rank must take the same chunks: rank 0's timing
+        decides."""
+        if self._comm is not None:
+            elapsed = self._comm.bcast(elapsed, root=0)
+        if elapsed < 0.25 and n == self._chunk:
+            self._chunk = min(2 * self._chunk, 100000)
+        elif elapsed > 1.0 and self._chunk > 1:
+            self._chunk //= 2
 
     def _python_step(self, work: Any) -> None:
         """Runs one Python part between chunks; an error on one rank is raised on all (a part

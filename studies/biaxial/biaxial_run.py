@@ -160,14 +160,14 @@ def _simulation(
 
 
 def wall_positions(sim: gs.Simulation) -> np.ndarray:
-    return np.array([sim.wall_position(k)[0 if k < 2 else 1] for k in range(4)])
+    return np.array([sim.walls[k].position[0 if k < 2 else 1] for k in range(4)])
 
 
 def wall_stresses(sim: gs.Simulation) -> np.ndarray:
     """Normal stress (Pa, per unit thickness) on left, right, bottom, top."""
     w = wall_positions(sim)
     width, height = w[1] - w[0], w[3] - w[2]
-    loads = np.array([-np.dot(sim.wall_force(k), NORMALS[k]) for k in range(4)])
+    loads = np.array([-np.dot(sim.walls[k].force, NORMALS[k]) for k in range(4)])
     return loads / np.array([height, height, width, width])
 
 
@@ -216,8 +216,8 @@ class Confinement:
             target = (self.stress + self.correction[k]) * lengths[k]
             if approach and stress[k] < 0.1 * self.stress:
                 target = max(target, max_speed / self.gain)
-            sim.set_wall_servo(
-                k, gs.geometry.Servo(target_force=target, gain=self.gain, max_speed=max_speed)
+            sim.walls[k].servo = gs.geometry.Servo(
+                target_force=target, gain=self.gain, max_speed=max_speed
             )
 
 
@@ -262,8 +262,8 @@ def load(case: BiaxialCase, h: float, specimen: Specimen) -> dict[str, Any]:
     w0 = specimen.walls
     h0 = w0[3] - w0[2]
     speed = case.strain_rate * h0  # closing speed of the two axial walls together
-    sim.set_wall_motion(2, velocity=(0.0, 0.5 * speed, 0.0))
-    sim.set_wall_motion(3, velocity=(0.0, -0.5 * speed, 0.0))
+    sim.walls[2].set_motion(velocity=(0.0, 0.5 * speed, 0.0))
+    sim.walls[3].set_motion(velocity=(0.0, -0.5 * speed, 0.0))
     servo = Confinement(case, h, case.restitution, range(2))
     total = int(round(case.max_strain / case.strain_rate / p["time_step"]))
     # Servo targets follow the height every few steps (the height shrinks by 5e-5 meanwhile).

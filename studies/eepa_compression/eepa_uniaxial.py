@@ -279,8 +279,8 @@ class Curve:
     stress: list[float] = field(default_factory=list)
 
     def add(self, sim: gs.Simulation, area: float) -> float:
-        sigma = float(sim.wall_force(PLATEN)[2]) / area
-        self.height.append(float(sim.wall_position(PLATEN)[2]))
+        sigma = float(sim.walls[PLATEN].force[2]) / area
+        self.height.append(float(sim.walls[PLATEN].position[2]))
         self.stress.append(sigma)
         return sigma
 
@@ -320,10 +320,10 @@ def core_solid_fraction(position: np.ndarray, radius: np.ndarray, die_diameter: 
 
 def _move_wall_to(sim: gs.Simulation, wall: int, z: float) -> None:
     """Put a wall (not touching any particle) at height z in one step, then stop it."""
-    dz = z - float(sim.wall_position(wall)[2])
-    sim.set_wall_motion(wall, velocity=(0.0, 0.0, dz / sim.time_step))
+    dz = z - float(sim.walls[wall].position[2])
+    sim.walls[wall].set_motion(velocity=(0.0, 0.0, dz / sim.time_step))
     sim.run(steps=1)
-    sim.set_wall_motion(wall, velocity=(0.0, 0.0, 0.0))
+    sim.walls[wall].set_motion(velocity=(0.0, 0.0, 0.0))
 
 
 def _settle(sim: gs.Simulation, speed: float, limit: float) -> bool:
@@ -348,13 +348,13 @@ def _drive(
 ) -> None:
     """Move the platen at ``speed`` (m/s, negative: down), recording every ``record`` m of
     travel, until ``stop(curve)`` is true."""
-    sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, speed))
+    sim.walls[PLATEN].set_motion(velocity=(0.0, 0.0, speed))
     steps = max(1, round(record / abs(speed) / sim.time_step))
     curve.add(sim, area)
     while not stop(curve):
         sim.run(steps=steps)
         curve.add(sim, area)
-    sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
+    sim.walls[PLATEN].set_motion(velocity=(0.0, 0.0, 0.0))
 
 
 def _pour(params: ParameterSet, notes: list[str]) -> tuple[Particles, float]:
@@ -388,11 +388,11 @@ def _compact(case: Case, params: ParameterSet, notes: list[str]) -> tuple[Partic
     _move_wall_to(sim, PLATEN, top + 0.1 * float(r.max()))
     # fast while the packing is looser than fast_fraction (nothing resists the platen there)
     fast_height = solid / (case.area * case.fast_fraction)
-    z = float(sim.wall_position(PLATEN)[2])
+    z = float(sim.walls[PLATEN].position[2])
     if z > fast_height:
-        sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, -case.preparation_speed))
+        sim.walls[PLATEN].set_motion(velocity=(0.0, 0.0, -case.preparation_speed))
         sim.run(until=sim.time + (z - fast_height) / case.preparation_speed)
-        sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
+        sim.walls[PLATEN].set_motion(velocity=(0.0, 0.0, 0.0))
     # then at 2 x platen_speed until the stress reaches the target (part of it is the platen's
     # contact damping), then held at the target stress for hold_time (the same process time at
     # every scale). The servo gain keeps gain x (damping coefficients of the platen contacts)
@@ -408,22 +408,22 @@ def _compact(case: Case, params: ParameterSet, notes: list[str]) -> tuple[Partic
         lambda c: float(np.mean(c.stress[-5:])) >= target,
     )
     servo = gs.geometry.Servo(0.05 * slow / (target * case.area), slow, target_stress=target)
-    sim.set_wall_servo(PLATEN, dataclasses.replace(servo, area=case.area))
+    sim.walls[PLATEN].servo = dataclasses.replace(servo, area=case.area)
     window = 0.1 * case.hold_time
     sim.run(until=sim.time + case.hold_time - window)
-    z0 = float(sim.wall_position(PLATEN)[2])
+    z0 = float(sim.walls[PLATEN].position[2])
     sim.run(until=sim.time + window)
-    z1 = float(sim.wall_position(PLATEN)[2])
+    z1 = float(sim.walls[PLATEN].position[2])
     creep = (z0 - z1) / z1 / window
     if abs(creep) > 0.1:  # strain rate above 0.1 /s at the end of the hold
         notes.append(f"compaction still creeping at {creep:.2g} /s")
-    sim.set_wall_servo(PLATEN, None)
-    sim.set_wall_motion(PLATEN, velocity=(0.0, 0.0, 0.0))
+    sim.walls[PLATEN].servo = None
+    sim.walls[PLATEN].set_motion(velocity=(0.0, 0.0, 0.0))
     with sim.particles(writable=False) as p:
         compacted = Particles(
             np.array(p.position), np.array(p.radius), params.insertions[0].material
         )
-    return compacted, float(sim.wall_position(PLATEN)[2])
+    return compacted, float(sim.walls[PLATEN].position[2])
 
 
 def run_test(
@@ -468,9 +468,9 @@ def run_test(
     )
     # lifted by the domain height: its lower end clears the sample and everything above it
     lift = params.domain.hi[2] - params.domain.lo[2]
-    _move_wall_to(sim, DIE, float(sim.wall_position(DIE)[2]) + lift)
+    _move_wall_to(sim, DIE, float(sim.walls[DIE].position[2]) + lift)
     sim.run(until=sim.time + case.rest_time)
-    start = float(sim.wall_position(PLATEN)[2])
+    start = float(sim.walls[PLATEN].position[2])
 
     def done(c: Curve) -> bool:
         # to the cap (ASTM D2166 takes the strength at 15 % strain when there is no peak), or

@@ -77,7 +77,7 @@ def test_extraction_is_the_same_decomposed(world):
         zero.update(momentum=np.zeros((n, 3)), spin=np.zeros((n, 3)))
         out = dict(zero, mass=np.where(np.arange(n) == face, 2.5e-4, 0.0))
         c.interface.book({"inward": zero, "outward": out}, np.zeros((n, 3)))
-        mass = c.interface.extract(h.level(1)._level)
+        mass = c.interface.extract(h.level(1).engine.core)
         removed.append((mass, h.level(1).gather()["id"]))
     assert removed[0][0] > 1e-4
     assert removed[0][0] == removed[1][0]

@@ -56,7 +56,7 @@ def test_insertion_walls_and_outlets_match_the_serial_run(world):
     a, b = serial.gather(("position", "radius")), decomposed.gather(("position", "radius"))
     assert np.array_equal(a["id"], b["id"])  # streamed particles: the same ids and places
     assert relative_difference(a["position"], b["position"], 0.12) <= 1e-10
-    floor_a, floor_b = serial.wall_force(4), decomposed.wall_force(4)
+    floor_a, floor_b = serial.walls[4].force, decomposed.walls[4].force
     assert np.allclose(floor_b, floor_a, rtol=1e-9)
 
 
@@ -76,13 +76,13 @@ def test_servo_wall_sees_the_global_force(world):
     for _ in range(8):
         for sim in (serial, decomposed):
             sim.run(steps=500)
-        pressed = max(pressed, serial.wall_force(6)[2])  # the bed pushes the lid up
-    za, zb = serial.wall_position(6)[2], decomposed.wall_position(6)[2]
+        pressed = max(pressed, serial.walls[6].force[2])  # the bed pushes the lid up
+    za, zb = serial.walls[6].position[2], decomposed.walls[6].position[2]
     assert za < serial.domain.hi[2] - 5e-3  # the lid moved down onto the bed
     assert pressed > 0  # and pressed on it
     assert abs(zb - za) <= 1e-10 * serial.domain.hi[2]
-    assert np.allclose(decomposed.wall_force(6), serial.wall_force(6), rtol=1e-8)
-    ia, ib = serial.wall_servo_integral(6), decomposed.wall_servo_integral(6)
+    assert np.allclose(decomposed.walls[6].force, serial.walls[6].force, rtol=1e-8)
+    ia, ib = serial.walls[6].servo_integral, decomposed.walls[6].servo_integral
     assert ia != 0 and abs(ib - ia) <= 1e-8 * abs(ia)  # the PI state follows the global load
 
 

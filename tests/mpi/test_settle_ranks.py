@@ -25,7 +25,7 @@ def test_20k_settle_positions_agree_after_1000_steps(world):
     assert decomposed.num_contacts() == serial.num_contacts()
     assert abs(decomposed.kinetic_energy() / serial.kinetic_energy() - 1) <= 1e-10
     for k in range(6):
-        fa, fb = serial.wall_force(k), decomposed.wall_force(k)
+        fa, fb = serial.walls[k].force, decomposed.walls[k].force
         assert np.allclose(fb, fa, rtol=1e-9, atol=1e-12 * np.abs(fa).max())
 
 

@@ -104,7 +104,7 @@ def _state(sim: gs.Simulation) -> dict[str, np.ndarray]:
             name: np.array(getattr(p, name)[order])
             for name in ("position", "velocity", "angular_velocity", "force", "torque")
         }
-    out["wall_force"] = np.array([sim.wall_force(k) for k in range(6)])
+    out["wall_force"] = np.array([sim.walls[k].force for k in range(6)])
     out["time"] = np.array([sim.time])
     return out
 

@@ -79,7 +79,7 @@ def _particle_arrays(sim: gs.Simulation) -> dict[str, np.ndarray]:
 def _state(sim: gs.Simulation) -> dict[str, np.ndarray]:
     out = _particle_arrays(sim)
     out["paddle"] = sim.mesh_walls()[0]["vertices"]
-    out["lid"] = sim.wall_position(2)
+    out["lid"] = sim.walls[2].position
     return out
 
 

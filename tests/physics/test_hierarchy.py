@@ -272,7 +272,7 @@ def test_interface_ledger_debits_are_paid_by_extraction():
     debit = 0.6 * available + max(before["pending_mass"][face], 0.0)
     out = dict(zero, mass=np.where(np.arange(n) == face, debit, 0.0))
     itf.book({"inward": zero, "outward": out}, np.zeros((n, 3)))
-    removed = itf.extract(child._level)
+    removed = itf.extract(child.engine.core)
     st = itf.inserter_status()
     assert st["debited_mass"][face] - before["debited_mass"][face] == pytest.approx(debit)
     # Scheduled particles are cancelled first; beyond the dead band (one parcel) the whole debt
@@ -316,7 +316,7 @@ def test_inflow_takes_the_bulk_velocity_not_the_crossings():
     inward["momentum"] = mass * crossing
     bulk = np.tile((0.01, -0.02, -0.03), (n, 1))
     itf.book({"inward": inward, "outward": zero}, bulk)
-    assert itf.insert(child._level) > 0
+    assert itf.insert(child.engine.core) > 0
     with child.particles(writable=False) as p:
         new = np.array([i not in before for i in np.asarray(p.id).tolist()])
         v = np.asarray(p.velocity)[new]

@@ -45,7 +45,7 @@ def test_rigid_material_wall_is_the_rigid_wall_bit_for_bit() -> None:
             with sim.particles(writable=False) as p:
                 rows.append(
                     np.concatenate(
-                        [p.position[0], p.velocity[0], p.angular_velocity[0], sim.wall_force(floor)]
+                        [p.position[0], p.velocity[0], p.angular_velocity[0], floor.force]
                     )
                 )
         return np.array(rows)

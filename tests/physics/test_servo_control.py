@@ -46,7 +46,7 @@ def lid_loads(sim: gs.Simulation, lid: int, duration: float, every: int = 100) -
     loads = []
     while sim.time < duration - 1e-12:
         sim.run(steps=every, progress=False)
-        loads.append(float(sim.wall_force(lid)[2]))  # the sphere pushes the lid up
+        loads.append(float(lid.force[2]))  # the sphere pushes the lid up
     return np.array(loads)
 
 
@@ -58,8 +58,8 @@ def test_proportional_servo_lags_by_speed_over_gain() -> None:
     assert abs(got / expected - 1) <= 1e-4, (
         f"P servo load {got:.6f} N, expected F + v / gain = {expected:.6f} N"
     )
-    assert sim.wall_servo_integral(lid) == 0.0  # no integral state without an integral gain
-    assert sim.wall_velocity(lid)[2] == pytest.approx(FLOOR_SPEED, rel=1e-4)
+    assert lid.servo_integral == 0.0  # no integral state without an integral gain
+    assert lid.velocity[2] == pytest.approx(FLOOR_SPEED, rel=1e-4)
 
 
 def test_integral_servo_holds_the_target_on_a_moving_bed() -> None:
@@ -68,7 +68,7 @@ def test_integral_servo_holds_the_target_on_a_moving_bed() -> None:
     loads = lid_loads(sim, lid, 0.04)
     got = loads[-50:].mean()
     assert abs(got / FORCE - 1) <= 1e-4, f"PI servo load {got:.6f} N, target {FORCE} N"
-    integral = sim.wall_servo_integral(lid)
+    integral = lid.servo_integral
     assert integral == pytest.approx(-FLOOR_SPEED / ki, rel=1e-3), (
         f"integrated error {integral:.4e} N s, expected -v / integral_gain "
         f"= {-FLOOR_SPEED / ki:.4e} N s"
@@ -102,8 +102,8 @@ def test_integral_does_not_wind_up_during_a_saturated_approach() -> None:
     ki = (K_CONTACT / 2) * GAIN**2 / 4
     sim, lid = sandwich(integral_gain=ki, floor_speed=0.0, gap=1e-3, max_speed=0.01)
     sim.run(steps=90_000, progress=False)  # 0.09 s of the 0.1 s approach
-    assert sim.wall_force(lid)[2] == 0.0
-    assert sim.wall_servo_integral(lid) == 0.0, "the integral wound up while saturated"
+    assert lid.force[2] == 0.0
+    assert lid.servo_integral == 0.0, "the integral wound up while saturated"
     loads = lid_loads(sim, lid, 0.2)
     assert abs(loads[-50:].mean() / FORCE - 1) <= 1e-4
     assert loads.max() <= 1.5 * FORCE, f"overshoot to {loads.max():.4f} N on contact"
@@ -113,14 +113,14 @@ def test_setting_the_servo_again_keeps_the_integral_switching_off_resets_it() ->
     ki = (K_CONTACT / 2) * GAIN**2 / 4
     sim, lid = sandwich(integral_gain=ki, floor_speed=FLOOR_SPEED)
     sim.run(steps=20_000, progress=False)
-    before = sim.wall_servo_integral(lid)
+    before = lid.servo_integral
     assert before < 0
-    sim.set_wall_servo(
-        lid, gs.geometry.Servo(target_force=2 * FORCE, gain=GAIN, max_speed=0.05, integral_gain=ki)
+    lid.servo = gs.geometry.Servo(
+        target_force=2 * FORCE, gain=GAIN, max_speed=0.05, integral_gain=ki
     )
-    assert sim.wall_servo_integral(lid) == before
-    sim.set_wall_servo(lid, None)
-    assert sim.wall_servo_integral(lid) == 0.0
+    assert lid.servo_integral == before
+    lid.servo = None
+    assert lid.servo_integral == 0.0
 
 
 def test_checkpoint_with_the_old_four_servo_values_restarts(tmp_path) -> None:
@@ -133,7 +133,7 @@ def test_checkpoint_with_the_old_four_servo_values_restarts(tmp_path) -> None:
     new, old = tmp_path / "new.h5", tmp_path / "old.h5"
     sim.checkpoint(new)
     sim.checkpoint(old)
-    key = f"rank_0/reals/walls/{lid}/servo"
+    key = f"rank_0/reals/walls/{lid.index}/servo"
     with h5py.File(old, "a") as f:
         values = f[key][()]
         assert len(values) == 6
@@ -141,10 +141,10 @@ def test_checkpoint_with_the_old_four_servo_values_restarts(tmp_path) -> None:
         f[key] = values[:4]
     runs = []
     for path in (new, old):
-        again, _ = sandwich(integral_gain=0.0, floor_speed=FLOOR_SPEED)
+        again, again_lid = sandwich(integral_gain=0.0, floor_speed=FLOOR_SPEED)
         again.restart(path)
         again.run(steps=3000, progress=False)
-        runs.append(np.concatenate([again.wall_force(lid), again.wall_position(lid)]))
+        runs.append(np.concatenate([again_lid.force, again_lid.position]))
     assert np.array_equal(runs[0], runs[1])
     with h5py.File(old, "a") as f:
         del f[key]

@@ -183,14 +183,14 @@ def test_sphere_resting_on_plane_loads_the_wall_with_its_weight():
     with sim.particles() as p:
         weight = p.mass[0] * 9.81
         assert abs(p.velocity[0, 2]) < 1e-6
-    np.testing.assert_allclose(sim.wall_force(floor), [0, 0, -weight], rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(floor.force, [0, 0, -weight], rtol=1e-6, atol=1e-12)
     # torque about the wall's reference point (origin): r x F with r = contact point
     np.testing.assert_allclose(
-        sim.wall_torque(floor), np.cross([0.01, 0.01, 0.0], [0, 0, -weight]), rtol=1e-6
+        floor.torque, np.cross([0.01, 0.01, 0.0], [0, 0, -weight]), rtol=1e-6
     )
     assert sim.num_contacts() == 1
     c = sim.contacts()
-    assert c["id_j"][0] == -1 - floor
+    assert c["id_j"][0] == -1 - floor.index
     np.testing.assert_allclose(c["normal"][0], [0, 0, 1])
 
 
@@ -199,7 +199,7 @@ def test_moving_wall_pushes_particles():
     piston = sim.add_wall(gs.Plane(point=(0, 0, 0.001), normal=(0, 0, 1), velocity=(0, 0, 0.2)))
     sim.add_particles(position=[[0.01, 0.01, 0.005]], radius=1e-3, material=GLASS)
     sim.run(until=0.05)
-    assert sim.wall_position(piston)[2] == pytest.approx(0.001 + 0.2 * 0.05)
+    assert piston.position[2] == pytest.approx(0.001 + 0.2 * 0.05)
     with sim.particles() as p:
         # hit by a wall moving at 0.2 m/s, the particle leaves faster than the wall
         assert p.velocity[0, 2] > 0.2
@@ -253,12 +253,12 @@ def test_results_do_not_depend_on_the_skin_contact_history_survives_rebuilds():
     xb, _ = state_by_id(b)
     assert np.array_equal(xa, xb)  # deterministic
     b.skin = 1e-9  # from now on b rebuilds, re-sorts and carries histories every step
-    lost.contact._apply_law(lost._level)  # control: every contact history dropped once
-    rebuilds = (a._level.rebuilds, b._level.rebuilds)
+    lost.contact._apply_law(lost.engine.core)  # control: every contact history dropped once
+    rebuilds = (a.engine.diagnostics()["rebuilds"], b.engine.diagnostics()["rebuilds"])
     for sim in (a, b, lost):
         sim.run(steps=2000)
-    assert b._level.rebuilds - rebuilds[1] >= 2000
-    assert a._level.rebuilds - rebuilds[0] < 20
+    assert b.engine.diagnostics()["rebuilds"] - rebuilds[1] >= 2000
+    assert a.engine.diagnostics()["rebuilds"] - rebuilds[0] < 20
     xa, wa = state_by_id(a)
     xb, wb = state_by_id(b)
     xl, wl = state_by_id(lost)
@@ -304,7 +304,7 @@ def test_contacts_need_recording_switched_on():
 def test_unsupported_law_combination_lists_the_supported_ones():
     sim = small_sim()
     with pytest.raises(ValueError) as err:
-        sim._level.set_contact_law("jkr", "epsd", False, True, False)
+        sim.engine.core.set_contact_law("jkr", "epsd", False, True, False)
     message = str(err.value)
     assert "contact law (normal+rolling) must be one of:" in message
     assert "got jkr+epsd" in message

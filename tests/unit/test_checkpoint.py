@@ -53,9 +53,9 @@ def snapshot(sim: gs.Simulation) -> dict[str, np.ndarray]:
         out = {k: getattr(p, k).copy() for k in FIELDS}
     for k in range(4):
         out[f"wall{k}"] = np.concatenate(
-            [sim.wall_force(k), sim.wall_torque(k), sim.wall_position(k)]
+            [sim.walls[k].force, sim.walls[k].torque, sim.walls[k].position]
         )
-    out["servo_integral"] = np.array([sim.wall_servo_integral(3)])  # the lid's PI state
+    out["servo_integral"] = np.array([sim.walls[3].servo_integral])  # the lid's PI state
     out["time"] = np.array([sim.time, sim.step])
     return out
 

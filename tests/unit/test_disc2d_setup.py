@@ -136,7 +136,7 @@ def state(sim: gs.Simulation) -> dict[str, np.ndarray]:
             k: getattr(p, k).copy()
             for k in ("position", "velocity", "angular_velocity", "force", "torque", "id")
         }
-    out["lid"] = np.concatenate([sim.wall_force(4), sim.wall_position(4)])
+    out["lid"] = np.concatenate([sim.walls[4].force, sim.walls[4].position])
     return out
 
 
@@ -156,8 +156,8 @@ def test_restart_in_2d_is_bit_identical_and_records_the_dimension(tmp_path: Path
     for key, value in expected.items():
         assert np.array_equal(got[key], value), f"{key} differs after restart"
     spheres = gs.Simulation(domain=BOX, contact=straight.contact, time_step=2e-6, skin=2e-4)
-    for wall in straight._walls:
-        spheres.add_wall(wall)
+    for wall in straight.walls:
+        spheres.add_wall(wall.geometry)
     with pytest.raises(ValueError, match=r"set-up '.*;dimension=2', this simulation is"):
         spheres.restart(path)
 

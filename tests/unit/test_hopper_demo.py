@@ -7,13 +7,14 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 import grainscale as gs
 from grainscale import cli
-from grainscale.examples import hopper_demo, hopper_geometry
+from grainscale.examples import hopper_demo, hopper_geometry, pour_and_settle
 
 
 @pytest.fixture(scope="module")
@@ -106,11 +107,20 @@ def test_hopper_geometry_read_off_the_mesh() -> None:
     )
 
 
-def test_hopper_demo_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize(
+    ("main", "message"),
+    [
+        (hopper_demo.main, "HopperCase.particles must be at least 10, got 3"),
+        (pour_and_settle.main, "DemoCase.particles must be an integer of at least 10, got 3"),
+    ],
+)
+def test_examples_reject_bad_options(
+    main: Any, message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     with pytest.raises(SystemExit) as exc:
-        hopper_demo.main(["--particles", "3", "--output", "unused"])
+        main(["--particles", "3", "--output", "unused"])
     assert exc.value.code == 2
-    assert "HopperCase.particles must be at least 10, got 3" in capsys.readouterr().err
+    assert message in capsys.readouterr().err
 
 
 def test_grainscale_demo_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> None:

@@ -221,7 +221,7 @@ def test_pack_tests_a_moving_wall_where_it_is_now():
     sim = gs.Simulation(domain=BOX, contact=LAW, gravity=(0, 0, 0), time_step=1e-5)
     k = sim.add_wall(gs.geometry.Plane(point=(0, 0, 0), normal=(0, 0, 1), velocity=(0, 0, 1.0)))
     sim.run(until=0.01)  # the plane has moved up 10 mm
-    z = float(sim.wall_position(k)[2])
+    z = float(k.position[2])
     assert z == pytest.approx(0.01, rel=1e-9)
     pack(sim, BOX, count=60, seed=1)
     x, r = positions(sim)
@@ -401,13 +401,13 @@ def test_stream_blocked_by_a_wall_keeps_its_mass_pending_until_the_wall_moves_aw
     sim.run(until=0.01)
     assert h.inserted_count == 0 and h.requested_mass > 0
     assert h.pending_mass == pytest.approx(h.scheduled_mass, rel=1e-12)
-    sim.set_wall_motion(k, velocity=(0, 0, -2.0))  # slides down out of the slab, then below it
+    k.set_motion(velocity=(0, 0, -2.0))  # slides down out of the slab, then below it
     sim.run(until=0.06)
     assert h.pending_count == 0
     particle = GLASS.density * 4 / 3 * math.pi * R**3
     assert 0 <= h.inserted_mass - h.requested_mass <= 0.02 * h.interval + particle
     x, r = positions(sim)
-    z_wall = float(sim.wall_position(k)[2])
+    z_wall = float(k.position[2])
     # All particles move at -1 m/s, the wall at -2 m/s: the wall ran ahead and no particle was
     # ever placed across or on it (each is at least r above it).
     assert np.all(x[:, 2] - z_wall >= r - 1e-12)

@@ -235,7 +235,7 @@ def _wall_force(params: ParameterSet) -> float:
     the overlap, and restitution 1 means no damping."""
     sim = build_simulation(params)
     sim.run(steps=1, progress=False)
-    return float(sim.wall_force(0)[2])
+    return float(sim.walls[0].force[2])
 
 
 def _on_floor(

@@ -74,8 +74,8 @@ def bed_state(sim: gs.Simulation) -> dict[str, np.ndarray]:
     fields = ("id", "position", "velocity", "angular_velocity", "force", "torque")
     with sim.particles(writable=False) as p:
         out = {k: getattr(p, k).copy() for k in fields}
-    out["lid"] = np.concatenate([sim.wall_force(1), sim.wall_position(1)])
-    out["lid_servo_integral"] = np.array([sim.wall_servo_integral(1)])
+    out["lid"] = np.concatenate([sim.walls[1].force, sim.walls[1].position])
+    out["lid_servo_integral"] = np.array([sim.walls[1].servo_integral])
     out["time"] = np.array([sim.time, sim.step])
     return out
 

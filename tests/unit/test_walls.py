@@ -140,7 +140,7 @@ def test_stl_millimetre_cube_is_a_working_wall(tmp_path: Path) -> None:
     with sim.particles(writable=False) as p:
         z, v, m = float(p.position[0, 2]), float(np.linalg.norm(p.velocity[0])), float(p.mass[0])
     assert 0.99 * R < z < R and v < 1e-5, f"sphere on the 10 mm box floor: z = {z} m, |v| = {v}"
-    np.testing.assert_allclose(sim.wall_force(k), [0, 0, -m * 9.81], rtol=1e-6, atol=1e-15)
+    np.testing.assert_allclose(k.force, [0, 0, -m * 9.81], rtol=1e-6, atol=1e-15)
 
 
 # --------------------------------------------------------------------------------------------
@@ -262,7 +262,7 @@ def test_rotating_mesh_vertices_follow_exact_rotation() -> None:
     )
     expected = origin + (v - origin) @ rot.T
     got = sim.mesh_walls()[0]["vertices"]
-    assert sim.mesh_walls()[0]["index"] == k and sim.mesh_walls()[0]["moving"]
+    assert sim.mesh_walls()[0]["index"] == k.index and sim.mesh_walls()[0]["moving"]
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
 
@@ -271,12 +271,12 @@ def test_set_wall_motion_translates_mesh_and_reports_velocity() -> None:
     v, t = plate(z=-5e-3)
     k = sim.add_wall(gs.geometry.Mesh(vertices=v, triangles=t))
     assert not sim.mesh_walls()[0]["moving"]
-    sim.set_wall_motion(k, velocity=(0.0, 0.2, 0.0))
-    np.testing.assert_array_equal(sim.wall_velocity(k), [0.0, 0.2, 0.0])
+    k.set_motion(velocity=(0.0, 0.2, 0.0))
+    np.testing.assert_array_equal(k.velocity, [0.0, 0.2, 0.0])
     sim.run(steps=500)
     got = sim.mesh_walls()[0]["vertices"]
     np.testing.assert_allclose(got, v + [0, 0.2 * sim.time, 0], rtol=0, atol=1e-12)
-    sim.set_wall_motion(k, velocity=(0.0, 0.0, 0.0))
+    k.set_motion(velocity=(0.0, 0.0, 0.0))
     before = got.copy()
     sim.run(steps=100)
     np.testing.assert_array_equal(sim.mesh_walls()[0]["vertices"], before)
@@ -302,11 +302,11 @@ def test_wall_torque_of_resting_sphere_is_lever_arm_cross_weight(kind: str) -> N
         m = float(p.mass[0])
         x = np.array(p.position[0])
     weight = np.array([0.0, 0.0, -m * 9.81])
-    np.testing.assert_allclose(sim.wall_force(k), weight, rtol=1e-6, atol=1e-15)
+    np.testing.assert_allclose(k.force, weight, rtol=1e-6, atol=1e-15)
     contact = np.array([x[0], x[1], 0.0])
     expected = np.cross(contact - ref, weight)
     np.testing.assert_allclose(
-        sim.wall_torque(k),
+        k.torque,
         expected,
         rtol=0,
         atol=1e-6 * np.linalg.norm(expected),
@@ -415,9 +415,8 @@ def test_rejected_servo_leaves_no_wall_behind() -> None:
     bad = gs.geometry.Servo(target_stress=1e3, gain=1e-3, max_speed=0.1)  # Plane: no area
     with pytest.raises(ValueError, match="Servo.area"):
         sim.add_wall(gs.Plane(point=(0, 0, 0.01), normal=(0, 0, -1)), servo=bad)
-    assert sim._level.num_walls() == 0, (
-        f"the rejected wall was added anyway: {sim._level.num_walls()} wall(s) in the core"
-    )
+    walls = sim.engine.diagnostics()["walls"]
+    assert walls == 0, f"the rejected wall was added anyway: {walls} wall(s) in the core"
 
 
 def test_servo_stress_on_plane_with_area_and_rectangle_default_area() -> None:
@@ -429,9 +428,46 @@ def test_servo_stress_on_plane_with_area_and_rectangle_default_area() -> None:
     np.testing.assert_allclose(plain.direction_for(rect), [0, 0, -1])
 
 
+def test_wall_handle_reads_and_sets_what_the_index_methods_did() -> None:
+    """add_wall returns a handle: force, torque, position, velocity, motion, servo and its
+    integral, the same values as the deprecated index methods (which warn)."""
+    sim = servo_sim()
+    floor = sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+    assert isinstance(floor, gs.WallHandle) and floor.index == 0 and sim.walls == [floor]
+    floor.set_motion(velocity=(0, 0, 0.01), angular_velocity=(0, 0, 2.0), origin=(0, 0, 0))
+    m = floor.motion
+    assert m.velocity.tolist() == [0, 0, 0.01] and m.angular_velocity.tolist() == [0, 0, 2.0]
+    floor.set_motion(velocity=(0, 0, 0))  # None keeps the rest
+    assert floor.motion.angular_velocity.tolist() == [0, 0, 2.0]
+    servo = gs.geometry.Servo(target_force=1.0, gain=1e-3, max_speed=0.1, integral_gain=0.1)
+    floor.servo = servo
+    assert floor.servo is servo
+    sim.run(steps=50, progress=False)
+    assert floor.velocity[2] > 0  # nothing pushes back: the servo drives the wall in
+    with pytest.warns(DeprecationWarning, match=r"wall_force\(index\) is deprecated.*wall.force"):
+        np.testing.assert_array_equal(sim.wall_force(0), floor.force)
+    with pytest.warns(DeprecationWarning, match="wall.position"):
+        np.testing.assert_array_equal(sim.wall_position(floor), floor.position)
+    with pytest.warns(DeprecationWarning, match="wall.servo_integral"):
+        assert sim.wall_servo_integral(0) == floor.servo_integral != 0
+    with pytest.warns(DeprecationWarning, match="wall.servo = servo"):
+        sim.set_wall_servo(0, None)
+    assert floor.servo is None and floor.servo_integral == 0
+    with pytest.raises(ValueError, match="WallHandle.servo must be a gs.Servo or None, got 3"):
+        floor.servo = 3
+    with pytest.raises(ValueError, match=r"WallHandle.set_motion.velocity"):
+        floor.set_motion(velocity=(0, 1))
+
+
 def test_wall_index_out_of_range() -> None:
     sim = servo_sim()
-    with pytest.raises(ValueError, match=r"wall index must be in \[0, 0\), got 0"):
+    with (
+        pytest.warns(DeprecationWarning),
+        pytest.raises(ValueError, match=r"wall index must be in \[0, 0\), got 0"),
+    ):
         sim.wall_force(0)
-    with pytest.raises(ValueError, match=r"wall index must be in \[0, 0\), got 3"):
+    with (
+        pytest.warns(DeprecationWarning),
+        pytest.raises(ValueError, match=r"wall index must be in \[0, 0\), got 3"),
+    ):
         sim.set_wall_motion(3, velocity=(0, 0, 1))

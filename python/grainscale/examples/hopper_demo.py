@@ -159,7 +159,11 @@ class HopperProbe:
     )
 
     def __init__(
-        self, outlet_z: float, hopper_wall: int, every: float, print_every: int | None = None
+        self,
+        outlet_z: float,
+        hopper_wall: gs.WallHandle,
+        every: float,
+        print_every: int | None = None,
     ) -> None:
         self.outlet_z = outlet_z
         self.hopper_wall = hopper_wall
@@ -181,7 +185,7 @@ class HopperProbe:
             local = np.array([p.mass[below].sum(), p.mass[~below].sum(), np.count_nonzero(below)])
         m_out, m_in, n_out = sim.sum_over_ranks(local)  # this rank's particles, then all
         n_out = int(n_out)
-        load = -float(sim.wall_force(self.hopper_wall)[2])  # particles push the wall down
+        load = -float(self.hopper_wall.force[2])  # particles push the wall down
         self.rows.append(
             (
                 sim.time,
@@ -229,6 +233,120 @@ def discharge_rate(
     return float(np.polyfit(time_[sel], discharged[sel], 1)[0])
 
 
+@dataclass
+class HopperRig:
+    """The demo's simulation with what the run needs of it (SI units)."""
+
+    sim: gs.Simulation
+    geo: HopperGeometry
+    hopper: gs.WallHandle
+    gate: gs.WallHandle
+    gate_half: float  # half the gate's side, m
+    stream: gs.insert.StreamHandle
+    pour_rate: float  # kg/s
+    pour_time: float  # s
+    face_z: float  # height of the pouring face, m
+    lo: np.ndarray  # the collection box, m
+    hi: np.ndarray
+
+
+def build(case: HopperCase, stl: Path) -> HopperRig:
+    """The hopper read from ``stl``, the collection box under it, the gate and the stream."""
+    glass = gs.Material(
+        density=case.density,
+        youngs_modulus=case.youngs_modulus,
+        poisson_ratio=case.poisson_ratio,
+        name="glass",
+    )
+    mesh = gs.geometry.Mesh.from_stl(stl, material=glass)
+    geo = HopperGeometry.of(mesh)
+    d = case.diameter
+    dist = case.radius_distribution
+    d_max = 2 * dist.max
+
+    # collection box under the hopper: 2.5 top radii wide, as deep as 1.5 top radii
+    half = 1.25 * geo.top_radius
+    floor_z = geo.outlet_z - 1.5 * geo.top_radius
+    face_z = geo.top_z - 2 * d_max  # the stream's slab lies below the face
+    lo = np.array([-half, -half, floor_z])
+    hi = np.array([half, half, geo.top_z + d])
+    box = gs.Box(lo=tuple(lo), hi=tuple(hi))
+    sim = gs.Simulation(
+        domain=box,
+        contact=gs.contact.HertzMindlin(
+            restitution=case.restitution,
+            friction=case.friction,
+            rolling=gs.contact.EPSD(case.rolling_friction, 0.3),
+        ),
+        time_step=0.2 * gs.timestep.rayleigh_time(glass, dist.min),
+        quiet=True,
+    )
+    hopper = sim.add_wall(mesh)
+    for plane in gs.geometry.box_walls(box, material=glass):
+        if plane.normal[2] >= 0:  # sides and floor; the top stays open
+            sim.add_wall(plane)
+    g = geo.outlet_radius + 1.5 * d  # gate: a square of side 2 g, 0.1 d under the outlet
+    gate_z = geo.outlet_z - 0.1 * d
+    gate = sim.add_wall(
+        gs.geometry.Mesh(
+            vertices=np.array([(-g, -g, gate_z), (g, -g, gate_z), (g, g, gate_z), (-g, g, gate_z)]),
+            triangles=np.array([(0, 1, 2), (0, 2, 3)]),
+            material=glass,
+        )
+    )
+
+    face_radius = geo.top_radius - d_max
+    rate = case.pour_fraction * case.density * math.pi * face_radius**2 * case.pour_speed
+    pour_time = case.particles * case.mean_particle_mass / rate
+    stream = sim.insert(
+        gs.insert.Stream(
+            gs.insert.DiscFace(centre=(0.0, 0.0, face_z), normal=(0, 0, -1), radius=face_radius),
+            mass_rate=rate,
+            radius=dist,
+            material=glass,
+            velocity=(0.0, 0.0, -case.pour_speed),
+            seed=case.seed,
+            stop=pour_time,
+        )
+    )
+    return HopperRig(sim, geo, hopper, gate, g, stream, rate, pour_time, face_z, lo, hi)
+
+
+def fill_and_discharge(
+    rig: HopperRig, case: HopperCase, vtk: gs.io.VTK, progress: bool | None
+) -> tuple[float, float, bool, float]:
+    """Fill until every particle is in and has fallen, settle, slide the gate away and run to
+    the end; (opening time s, inventory kg, whether it opened, particle-steps run)."""
+    sim, geo = rig.sim, rig.geo
+    particle_steps = 0.0
+
+    def advance(until: float) -> None:
+        nonlocal particle_steps
+        n, s0 = sim.num_particles, sim.step
+        sim.run(until=min(until, case.duration), progress=progress)
+        particle_steps += 0.5 * (n + sim.num_particles) * (sim.step - s0)
+
+    fall = math.sqrt(2 * (rig.face_z - geo.outlet_z) / 9.81)
+    advance(rig.pour_time + fall)
+    while rig.stream.pending_count > 0 and sim.time < case.duration:
+        advance(sim.time + 0.01)
+    advance(sim.time + case.settle)
+    t_open = sim.time
+    with sim.particles(writable=False) as p:
+        inventory = float(sim.sum_over_ranks(p.mass[p.position[:, 2] >= geo.outlet_z].sum()))
+    travel = 2 * rig.gate_half + case.diameter
+    opened = sim.time < case.duration
+    if opened:
+        rig.gate.set_motion(velocity=(case.gate_speed, 0.0, 0.0))
+        advance(t_open + travel / case.gate_speed)
+        # an extra snapshot: mesh walls are written while they move, so this records the open
+        # gate (the one ParaView then shows for the rest of the run)
+        vtk.write(sim)
+        rig.gate.set_motion(velocity=(0.0, 0.0, 0.0))
+    advance(case.duration)
+    return t_open, inventory, opened, particle_steps
+
+
 def run(
     output: str | Path,
     case: HopperCase | None = None,
@@ -261,117 +379,20 @@ def run(
     stl = Path(stl)
     if lead and stl.resolve() != (out / "hopper.stl").resolve():
         shutil.copyfile(stl, out / "hopper.stl")
-
-    glass = gs.Material(
-        density=case.density,
-        youngs_modulus=case.youngs_modulus,
-        poisson_ratio=case.poisson_ratio,
-        name="glass",
-    )
-    hopper = gs.geometry.Mesh.from_stl(stl, material=glass)
-    geo = HopperGeometry.of(hopper)
-    d = case.diameter
-    dist = case.radius_distribution
-    d_max = 2 * dist.max
-
-    # collection box under the hopper: 2.5 top radii wide, as deep as 1.5 top radii
-    half = 1.25 * geo.top_radius
-    floor_z = geo.outlet_z - 1.5 * geo.top_radius
-    face_z = geo.top_z - 2 * d_max  # the stream's slab lies below the face
-    lo = np.array([-half, -half, floor_z])
-    hi = np.array([half, half, geo.top_z + d])
-    box = gs.Box(lo=tuple(lo), hi=tuple(hi))
-    dt = 0.2 * gs.timestep.rayleigh_time(glass, dist.min)
-    sim = gs.Simulation(
-        domain=box,
-        contact=gs.contact.HertzMindlin(
-            restitution=case.restitution,
-            friction=case.friction,
-            rolling=gs.contact.EPSD(case.rolling_friction, 0.3),
-        ),
-        time_step=dt,
-        quiet=True,
-    )
-    wall_hopper = sim.add_wall(hopper)
-    for plane in gs.geometry.box_walls(box, material=glass):
-        if plane.normal[2] >= 0:  # sides and floor; the top stays open
-            sim.add_wall(plane)
-    g = geo.outlet_radius + 1.5 * d  # gate: a square of side 2 g, 0.1 d under the outlet
-    gate_z = geo.outlet_z - 0.1 * d
-    gate = sim.add_wall(
-        gs.geometry.Mesh(
-            vertices=np.array([(-g, -g, gate_z), (g, -g, gate_z), (g, g, gate_z), (-g, g, gate_z)]),
-            triangles=np.array([(0, 1, 2), (0, 2, 3)]),
-            material=glass,
-        )
-    )
-
-    face_radius = geo.top_radius - d_max
-    area = math.pi * face_radius**2
-    rate = case.pour_fraction * case.density * area * case.pour_speed
-    target = case.particles * case.mean_particle_mass
-    pour_time = target / rate
-    stream = sim.insert(
-        gs.insert.Stream(
-            gs.insert.DiscFace(centre=(0.0, 0.0, face_z), normal=(0, 0, -1), radius=face_radius),
-            mass_rate=rate,
-            radius=dist,
-            material=glass,
-            velocity=(0.0, 0.0, -case.pour_speed),
-            seed=case.seed,
-            stop=pour_time,
-        )
-    )
+    rig = build(case, stl)
+    sim, geo = rig.sim, rig.geo
 
     vtk = gs.io.VTK(out, every=case.vtk_every)
     sim.output(vtk)
     print_every = max(1, round(case.thermo_every / case.sample_every)) if verbose else None
-    probe = HopperProbe(geo.outlet_z, wall_hopper, case.sample_every, print_every)
+    probe = HopperProbe(geo.outlet_z, rig.hopper, case.sample_every, print_every)
     sim.output(probe)
     if lead:
-        gs.io.write_vtp_mesh(out / "bin.vtp", *_box_surface(lo, hi))
+        gs.io.write_vtp_mesh(out / "bin.vtp", *_box_surface(rig.lo, rig.hi))
+    say(hopper_report.setup_text(case, rig, stl, out))
 
-    mm = 1e3
-    say(
-        f"grainscale hopper demo: {case.particles} spheres, d = {d * mm:g} mm "
-        f"+/- {case.diameter_spread:.0%} (uniform), E = {case.youngs_modulus:g} Pa, "
-        f"e = {case.restitution:g}, mu = {case.friction:g}, mu_r = {case.rolling_friction:g}"
-    )
-    say(
-        f"hopper {stl.name}: {len(hopper.triangles)} triangles, outlet "
-        f"{2 * geo.outlet_radius * mm:.1f} mm, top {2 * geo.top_radius * mm:.1f} mm at "
-        f"{(geo.top_z - geo.outlet_z) * mm:.1f} mm; poured at {rate:.3g} kg/s for "
-        f"{pour_time:.3g} s; {case.duration:g} s in steps of {dt:.3e} s; output in {out}"
-    )
-
-    # fill: until every particle is in and has fallen, then settle; then slide the gate away
     t_run0 = time.perf_counter()
-    ps0 = 0.0
-
-    def advance(until: float) -> None:
-        nonlocal ps0
-        n, s0 = sim.num_particles, sim.step
-        sim.run(until=min(until, case.duration), progress=progress)
-        ps0 += 0.5 * (n + sim.num_particles) * (sim.step - s0)
-
-    fall = math.sqrt(2 * (face_z - geo.outlet_z) / 9.81)
-    advance(pour_time + fall)
-    while stream.pending_count > 0 and sim.time < case.duration:
-        advance(sim.time + 0.01)
-    advance(sim.time + case.settle)
-    t_open = sim.time
-    with sim.particles(writable=False) as p:
-        inventory = float(sim.sum_over_ranks(p.mass[p.position[:, 2] >= geo.outlet_z].sum()))
-    travel = 2 * g + d
-    opened = sim.time < case.duration
-    if opened:
-        sim.set_wall_motion(gate, velocity=(case.gate_speed, 0.0, 0.0))
-        advance(t_open + travel / case.gate_speed)
-        # an extra snapshot: mesh walls are written while they move, so this records the open
-        # gate (the one ParaView then shows for the rest of the run)
-        vtk.write(sim)
-        sim.set_wall_motion(gate, velocity=(0.0, 0.0, 0.0))
-    advance(case.duration)
+    t_open, inventory, opened, particle_steps = fill_and_discharge(rig, case, vtk, progress)
     wall_clock = time.perf_counter() - t_run0
 
     hist = probe.array()
@@ -390,17 +411,15 @@ def run(
     if lead:
         hopper_report.plot(plot, hist, case, t_open if opened else None, inventory, w)
 
-    status = stream.status()
+    status = rig.stream.status()
     with sim.particles(writable=False) as p:
         below = p.position[:, 2] < geo.outlet_z
         local = np.array([p.mass[below].sum(), np.count_nonzero(below)])
     m_out, n_out = sim.sum_over_ranks(local)
-    m_out, n_out = float(m_out), int(n_out)
-    walls_pvd = out / "particles_walls.pvd"
     result: dict[str, Any] = dict(
         output=out,
         pvd=vtk.pvd.path,
-        walls_pvd=walls_pvd,
+        walls_pvd=out / "particles_walls.pvd",
         plot=plot,
         summary=out / "summary.md",
         history=out / "history.csv",
@@ -408,15 +427,15 @@ def run(
         inserted=int(status["inserted_count"]),
         inserted_mass=float(status["inserted_mass"]),
         inventory=inventory,
-        discharged_mass=m_out,
-        discharged=n_out,
+        discharged_mass=float(m_out),
+        discharged=int(n_out),
         open_time=t_open,
         discharge_rate=w,
         lost=sim.lost_particles,
         steps=sim.step,
-        time_step=dt,
+        time_step=sim.time_step,
         wall_clock=wall_clock,
-        particle_steps_per_second=ps0 / wall_clock if wall_clock > 0 else math.nan,
+        particle_steps_per_second=particle_steps / wall_clock if wall_clock > 0 else math.nan,
         snapshots=len(vtk.files),
     )
     text = hopper_report.summary(case, geo, stl, result, sim, time.perf_counter() - t_start)

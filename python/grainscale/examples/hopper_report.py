@@ -11,8 +11,24 @@ import numpy as np
 
 if TYPE_CHECKING:
     import grainscale as gs
-    from grainscale.examples.hopper_demo import HopperCase
+    from grainscale.examples.hopper_demo import HopperCase, HopperRig
     from grainscale.examples.hopper_geometry import HopperGeometry
+
+
+def setup_text(case: HopperCase, rig: HopperRig, stl: Path, out: Path) -> str:
+    """The two lines the demo prints before it runs: the particles, the hopper and the pour."""
+    mm = 1e3
+    geo = rig.geo
+    return (
+        f"grainscale hopper demo: {case.particles} spheres, d = {case.diameter * mm:g} mm "
+        f"+/- {case.diameter_spread:.0%} (uniform), E = {case.youngs_modulus:g} Pa, "
+        f"e = {case.restitution:g}, mu = {case.friction:g}, mu_r = {case.rolling_friction:g}\n"
+        f"hopper {stl.name}: {len(rig.hopper.geometry.triangles)} triangles, outlet "
+        f"{2 * geo.outlet_radius * mm:.1f} mm, top {2 * geo.top_radius * mm:.1f} mm at "
+        f"{(geo.top_z - geo.outlet_z) * mm:.1f} mm; poured at {rig.pour_rate:.3g} kg/s for "
+        f"{rig.pour_time:.3g} s; {case.duration:g} s in steps of {rig.sim.time_step:.3e} s; "
+        f"output in {out}"
+    )
 
 
 def summary(

@@ -35,7 +35,7 @@ VERSION = 2
 
 def save(sim: Any, path: str | os.PathLike[str]) -> None:
     """Write the state of ``sim`` to the HDF5 file ``path`` (atomically; collective)."""
-    state = sim._level.save_state()
+    state = sim.engine.save_state()
     comm = sim.comm
     states = [state] if comm is None else comm.gather(state, root=0)
     error: BaseException | None = None
@@ -83,7 +83,7 @@ def save_hierarchy(sims: list[Any], path: str | os.PathLike[str], coupling_state
 
     parts = []
     for sim in sims:
-        state = sim._level.save_state()
+        state = sim.engine.save_state()
         comm = sim.comm
         parts.append(
             ([state] if comm is None else comm.gather(state, root=0), sim._checkpoint_extra())
@@ -122,7 +122,7 @@ def load_hierarchy(sims: list[Any], path: str | os.PathLike[str]) -> str:
                 )
             text = str(f.attrs["hierarchy_state"])
             for k, sim in enumerate(sims):
-                grid = tuple(sim._level.decomposition()["grid"])
+                grid = sim.engine.processor_grid()
                 loaded.append(_read_simulation(f[f"level_{k}"], sim.rank, sim.ranks, grid, path))
     except KeyError as err:
         error = ValueError(f"checkpoint {path!r} is not a hierarchy checkpoint ({err})")
@@ -131,10 +131,7 @@ def load_hierarchy(sims: list[Any], path: str | os.PathLike[str]) -> str:
     parallel.agree(sims[0].comm, error)
     for sim, (parts, exact, extra) in zip(sims, loaded, strict=True):
         sim._restore_checkpoint_extra(extra)
-        if exact:
-            sim._level.load_state(parts[0])
-        else:
-            sim._level.load_redistributed(parts)
+        sim.engine.load_state(parts, exact)
     return text
 
 
@@ -146,7 +143,7 @@ def load(sim: Any, path: str | os.PathLike[str]) -> None:
         ValueError: the file is not a grainscale checkpoint, is corrupt, or was written for a
             different set-up (contact law, materials, walls, inserters).
     """
-    grid = tuple(sim._level.decomposition()["grid"])
+    grid = sim.engine.processor_grid()
     error: BaseException | None = None
     parts: list[dict[str, Any]] = []
     exact = False
@@ -157,10 +154,7 @@ def load(sim: Any, path: str | os.PathLike[str]) -> None:
         error = err
     parallel.agree(sim.comm, error)
     sim._restore_checkpoint_extra(extra)
-    if exact:
-        sim._level.load_state(parts[0])
-    else:
-        sim._level.load_redistributed(parts)
+    sim.engine.load_state(parts, exact)
 
 
 def _open(path: str | os.PathLike[str]) -> Any:

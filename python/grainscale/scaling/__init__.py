@@ -13,6 +13,7 @@ reports the similarity numbers the scheme does not preserve::
 
 from __future__ import annotations
 
+from .level import level_parameters
 from .parameters import ParameterSet, Particles, build_simulation
 from .table import DIMENSIONS, SCHEMES, Similarity, factors, similarity_exponents
 from .transform import Scaled, scale
@@ -26,6 +27,7 @@ __all__ = [
     "Similarity",
     "build_simulation",
     "factors",
+    "level_parameters",
     "scale",
     "similarity_exponents",
 ]

@@ -1,0 +1,1 @@
+"""Multi-level coarse graining of a bin filled by a stream: the books of the material."""

@@ -1,0 +1,1 @@
+"""Multi-level coarse graining where the coarse level jams: mass conserved level by level."""

@@ -1,0 +1,1 @@
+"""Silo discharge against the Beverloo law, resolved (validation/CASES.md D1)."""
