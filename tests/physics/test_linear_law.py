@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 import pytest
+from cases_tables import TABLE_E, TABLE_E_F, TABLE_W0TC_NO_TENSION, TABLE_W0TC_TENSION, TABLE_ZETA
 
 import grainscale as gs
 
@@ -37,48 +38,6 @@ TOL_TC_STEPS = 2.0  # |t_c - t_ref| <= 2 dt
 TOL_V_INDEPENDENCE = 1e-4
 TOL_TABLE = 1e-4
 
-# CASES.md A2 table.
-TABLE_E = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98)
-TABLE_ZETA = (
-    0.59116,
-    0.45595,
-    0.35786,
-    0.28000,
-    0.21545,
-    0.16049,
-    0.11281,
-    0.07085,
-    0.03352,
-    0.01632,
-    0.00643,
-)
-TABLE_W0TC_TENSION = (
-    3.8951,
-    3.5299,
-    3.3644,
-    3.2725,
-    3.2172,
-    3.1829,
-    3.1618,
-    3.1495,
-    3.1434,
-    3.1420,
-    3.1417,
-)
-TABLE_E_F = (0.2527, 0.3249, 0.3971, 0.4720, 0.5503, 0.6323, 0.7182, 0.8081, 0.9020, 0.9505, 0.9801)
-TABLE_W0TC_NO_TENSION = (
-    2.3267,
-    2.4660,
-    2.5805,
-    2.6813,
-    2.7724,
-    2.8562,
-    2.9342,
-    3.0073,
-    3.0763,
-    3.1094,
-    3.1288,
-)
 
 CONVERGENCE_E = (0.1, 0.5, 0.9)  # representative subset rerun at dt/2
 VELOCITY_E = (0.2, 0.5, 0.8)
@@ -166,14 +125,10 @@ def a2_bounce(materials, run_impact):
             law = gs.contact.Linear(
                 normal_stiffness=STIFFNESS, friction=0.0, restitution=e, limit_force=limit_force
             )
+            window = [(0.8 * t_ref, 1.2 * t_ref)]
+            duration = 2.0 * math.pi / omega_d
             res = run_impact(
-                law,
-                mat,
-                RADIUS,
-                v0,
-                time_step=dt,
-                duration=2.0 * math.pi / omega_d,
-                record_windows=[(0.8 * t_ref, 1.2 * t_ref)],
+                law, mat, RADIUS, v0, time_step=dt, duration=duration, record_windows=window
             )
             store[key] = (res, omega0, t_ref)
         return store[key]

@@ -17,6 +17,7 @@ from functools import cache
 
 import numpy as np
 import pytest
+from cases_tables import TABLE_E, TABLE_E_F, TABLE_TC_NO_TENSION, TABLE_TC_TENSION, TABLE_ZETA
 from scipy.integrate import solve_ivp
 
 import grainscale as gs
@@ -31,48 +32,6 @@ TOL_E = 2e-3
 TOL_V_INDEPENDENCE = 1e-3
 TOL_TC = 1e-2
 
-# CASES.md A2 / A3 tables (published in CASES.md; used to check the closed forms below).
-TABLE_E = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98)
-TABLE_ZETA = (
-    0.59116,
-    0.45595,
-    0.35786,
-    0.28000,
-    0.21545,
-    0.16049,
-    0.11281,
-    0.07085,
-    0.03352,
-    0.01632,
-    0.00643,
-)
-TABLE_E_F = (0.2527, 0.3249, 0.3971, 0.4720, 0.5503, 0.6323, 0.7182, 0.8081, 0.9020, 0.9505, 0.9801)
-TABLE_TC_TENSION = (
-    1.5107,
-    1.2959,
-    1.1949,
-    1.1342,
-    1.0934,
-    1.0640,
-    1.0419,
-    1.0247,
-    1.0111,
-    1.0053,
-    1.0020,
-)
-TABLE_TC_NO_TENSION = (
-    0.7880,
-    0.8199,
-    0.8461,
-    0.8693,
-    0.8906,
-    0.9108,
-    0.9305,
-    0.9502,
-    0.9711,
-    0.9830,
-    0.9916,
-)
 # B3 elastic values (e = 1): delta_max (m), F_max (N), t_c (s).
 TABLE_B3 = {"al_oxide": (8.089e-6, 615.4, 6.104e-6), "cast_iron": (17.19e-6, 506.8, 12.97e-6)}
 
@@ -154,14 +113,10 @@ def bounce(materials, hertz_pair, run_impact):
             # Per-step records only around the expected end of contact (speed); a contact end
             # outside this window shows up as NaN duration with an explanatory note.
             t_end = ratio * tc_el
+            window = [(0.93 * t_end, 1.07 * t_end)]
+            duration = t_sep * tc_el + 2.0 * tc_el
             res = run_impact(
-                law,
-                mat,
-                RADIUS,
-                v0,
-                time_step=dt,
-                duration=t_sep * tc_el + 2.0 * tc_el,
-                record_windows=[(0.93 * t_end, 1.07 * t_end)],
+                law, mat, RADIUS, v0, time_step=dt, duration=duration, record_windows=window
             )
             store[key] = (res, tc_el)
         return store[key]
