@@ -350,11 +350,9 @@ void export_coupling(py::module_& m) {
       "add_region_outlet",
       [](Level& l, const Interface& it, int every, Real band) {
         OutletSpec s;
-        s.keep = it.shared_grid();
         s.keep_faces = it.grid().faces().size();
         s.every = every;
-        s.band = band;
-        return l.add_outlet(s);
+        return l.add_region_outlet(s, it.shared_grid(), band);
       },
       py::arg("interface"), py::arg("every"), py::arg("band"));
 }

@@ -120,8 +120,9 @@ int Insertion::add_stream(const Level& level, const StreamSpec& spec) {
   return static_cast<int>(streams_.size()) - 1;
 }
 
-int Insertion::add_outlet(const OutletSpec& spec, Real time) {
+int Insertion::add_outlet(const OutletSpec& spec, Real time, OutletKeep keep) {
   outlets_.emplace_back(spec, time);
+  keeps_.push_back(std::move(keep));
   return static_cast<int>(outlets_.size()) - 1;
 }
 
@@ -171,11 +172,12 @@ void Insertion::apply_outlets(Level& level) {
   // Per outlet due now, summed over the ranks: count, mass, moment (3), then the face masses of
   // an outlet with a `keep` grid.
   std::vector<Real> tally;
-  for (Outlet& outlet : outlets_) {
+  for (std::size_t k = 0; k < outlets_.size(); ++k) {
+    Outlet& outlet = outlets_[k];
     if (!outlet.due(step)) continue;
     const Region& region = outlet.spec().region;
-    const ExchangeGrid* keep = outlet.spec().keep.get();
-    const Real band = outlet.spec().band;
+    const ExchangeGrid* keep = keeps_[k].grid.get();
+    const Real band = keeps_[k].band;
     // Most particles are far from an outlet: a bounding-box test first (this runs every step).
     Vec3 lo, hi;
     region.bounds(lo, hi);

@@ -5,9 +5,11 @@
 // (Level::insertion_site, Level::place_particles), which other floors (coupling/) use as well.
 #pragma once
 
+#include <memory>
 #include <utility>
 #include <vector>
 
+#include "field/exchange_grid.hpp"
 #include "insert/occupancy_grid.hpp"
 #include "insert/outlet.hpp"
 #include "insert/pack.hpp"
@@ -27,13 +29,22 @@ struct InsertionSite {
   WallClearance walls;
 };
 
+// The region of a region outlet: it removes the particles farther than `band` (m) from the
+// grid's region cells (the fine level of a hierarchy: particles leaving its region; the band
+// keeps the grains its insertion shells place with the centre just outside a face) and books
+// them per interface face (the nearest one); the outlet's own region is not used.
+struct OutletKeep {
+  std::shared_ptr<const ExchangeGrid> grid;
+  Real band = 0;
+};
+
 class Insertion {
  public:
   // Level::pack: validates, places and adds the particles (collective).
   std::pair<GlobalId, Index> pack(Level& level, const PackSpec& spec);
   // Validated against the level's set-up; returns the index.
   int add_stream(const Level& level, const StreamSpec& spec);
-  int add_outlet(const OutletSpec& spec, Real time);
+  int add_outlet(const OutletSpec& spec, Real time, OutletKeep keep = OutletKeep());
   std::vector<StreamInserter>& streams() { return streams_; }
   const std::vector<StreamInserter>& streams() const { return streams_; }
   std::vector<Outlet>& outlets() { return outlets_; }
@@ -55,6 +66,7 @@ class Insertion {
 
   std::vector<StreamInserter> streams_;
   std::vector<Outlet> outlets_;
+  std::vector<OutletKeep> keeps_;  // per outlet
 };
 
 }  // namespace grainscale

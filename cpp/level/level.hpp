@@ -175,6 +175,9 @@ class Level {
   // result does not depend on how Python chunks run(). Returns the index.
   int add_stream(const StreamSpec& spec);
   int add_outlet(const OutletSpec& spec);
+  // An outlet that removes the particles leaving `keep`'s region cells (insertion.hpp).
+  int add_region_outlet(const OutletSpec& spec, std::shared_ptr<const ExchangeGrid> keep,
+                        Real band);
   std::vector<StreamInserter>& streams() { return insertion_.streams(); }
   std::vector<Outlet>& outlets() { return insertion_.outlets(); }
   // Deletes owned particles by index (order irrelevant, repeats ignored) keeping the contact

@@ -64,6 +64,11 @@ int Level::add_stream(const StreamSpec& spec) { return insertion_.add_stream(*th
 
 int Level::add_outlet(const OutletSpec& spec) { return insertion_.add_outlet(spec, time_); }
 
+int Level::add_region_outlet(const OutletSpec& spec, std::shared_ptr<const ExchangeGrid> keep,
+                             Real band) {
+  return insertion_.add_outlet(spec, time_, OutletKeep{std::move(keep), band});
+}
+
 int Level::add_force_hook(std::shared_ptr<ForceHook> hook) {
   force_hooks_.push_back(std::move(hook));
   forces_valid_ = false;
