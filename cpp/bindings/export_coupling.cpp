@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "coupling/interface.hpp"
+#include "coupling/level_coupling.hpp"
 
 namespace py = pybind11;
 using namespace grainscale;
@@ -303,13 +304,13 @@ void export_coupling(py::module_& m) {
   level.def(
       "add_coupling",
       [](Level& l, const Interface& it, Real layer, Real fade) {
-        return l.add_coupling(CouplingForces(it.shared_grid(), layer, fade));
+        return add_coupling(l, CouplingForces(it.shared_grid(), layer, fade));
       },
       py::arg("interface"), py::arg("layer"), py::arg("fade"));
   level.def(
       "set_coupling_acceleration",
       [](Level& l, int k, const py::array_t<Real, py::array::c_style | py::array::forcecast>& a) {
-        CouplingForces& c = l.coupling(k);
+        CouplingForces& c = coupling(l, k);
         const std::size_t n = c.grid().grid().n_cells();
         c.acceleration = a.size() == 0 ? std::vector<Vec3>() : vec3_rows(a, n, "acceleration");
       },
@@ -318,7 +319,7 @@ void export_coupling(py::module_& m) {
   level.def(
       "set_coupling_velocity_bounds",
       [](Level& l, int k, const Array& lo, const Array& hi) {
-        CouplingForces& c = l.coupling(k);
+        CouplingForces& c = coupling(l, k);
         const std::size_t n = c.grid().grid().n_cells();
         c.velocity_min = lo.size() == 0 ? std::vector<Vec3>() : vec3_rows(lo, n, "velocity_min");
         c.velocity_max = lo.size() == 0 ? std::vector<Vec3>() : vec3_rows(hi, n, "velocity_max");
@@ -328,7 +329,7 @@ void export_coupling(py::module_& m) {
       "set_coupling_pressure",
       [](Level& l, int k, const py::array_t<Real, py::array::c_style | py::array::forcecast>& p,
          const py::array_t<Real, py::array::c_style | py::array::forcecast>& speed) {
-        CouplingForces& c = l.coupling(k);
+        CouplingForces& c = coupling(l, k);
         const std::size_t n = c.grid().faces().size();
         c.pressure = p.size() == 0 ? std::vector<Real>() : reals(p, n, "pressure");
         c.max_inward_speed = p.size() == 0 ? std::vector<Real>() : reals(speed, n, "speed");
@@ -340,7 +341,7 @@ void export_coupling(py::module_& m) {
         std::vector<Real> m;
         {
           py::gil_scoped_release release;
-          m = l.coupling_push_moment(k);
+          m = coupling_push_moment(l, k);
         }
         return py::array_t<Real>(static_cast<py::ssize_t>(m.size()), m.data());
       },
@@ -349,11 +350,9 @@ void export_coupling(py::module_& m) {
       "add_region_outlet",
       [](Level& l, const Interface& it, int every, Real band) {
         OutletSpec s;
-        s.keep = it.shared_grid();
         s.keep_faces = it.grid().faces().size();
         s.every = every;
-        s.band = band;
-        return l.add_outlet(s);
+        return l.add_region_outlet(s, it.shared_grid(), band);
       },
       py::arg("interface"), py::arg("every"), py::arg("band"));
 }

@@ -27,7 +27,7 @@
 #include <memory>
 #include <vector>
 
-#include "coupling/exchange_grid.hpp"
+#include "field/exchange_grid.hpp"
 #include "state/domain.hpp"
 #include "state/particle_store.hpp"
 

@@ -20,7 +20,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "coupling/exchange_grid.hpp"
+#include "field/exchange_grid.hpp"
 #include "parallel/communicator.hpp"
 #include "state/domain.hpp"
 #include "state/particle_store.hpp"

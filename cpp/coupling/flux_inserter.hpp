@@ -41,7 +41,7 @@
 #include <string>
 #include <vector>
 
-#include "coupling/exchange_grid.hpp"
+#include "field/exchange_grid.hpp"
 #include "insert/occupancy_grid.hpp"
 #include "insert/random.hpp"
 #include "insert/region.hpp"

@@ -8,6 +8,8 @@
 #include <tuple>
 #include <unordered_set>
 
+#include "coupling/flux_insertion.hpp"
+
 namespace grainscale {
 
 namespace {
@@ -112,7 +114,7 @@ Real Interface::extract(Level& child) {
   return removed;
 }
 
-std::int64_t Interface::insert(Level& child) { return child.insert_flux(inserters_); }
+std::int64_t Interface::insert(Level& child) { return insert_flux(child, inserters_); }
 
 Real Interface::remove_shadow(Level& parent, std::vector<Real> excess, const Vec3& near,
                               Real budget) {

@@ -16,10 +16,10 @@
 #include <memory>
 #include <vector>
 
-#include "coupling/exchange_grid.hpp"
 #include "coupling/face_flux.hpp"
 #include "coupling/flux_inserter.hpp"
 #include "field/cell_average.hpp"
+#include "field/exchange_grid.hpp"
 #include "level/level.hpp"
 
 namespace grainscale {

@@ -9,7 +9,7 @@ namespace grainscale {
 
 Outlet::Outlet(const OutletSpec& spec, Real time) : spec_(spec) {
   if (spec.every < 1) throw_invalid("Outlet.every", "a positive number of steps", spec.every);
-  face_mass_.assign(spec.keep ? spec.keep_faces : 0, 0);
+  face_mass_.assign(spec.keep_faces, 0);
   time_.push_back(time);
   mass_.push_back(0);
   count_.push_back(0);

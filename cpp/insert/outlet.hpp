@@ -17,18 +17,13 @@
 
 namespace grainscale {
 
-class ExchangeGrid;
-
 struct OutletSpec {
   Region region = Region::box(Vec3::Zero(), Vec3::Ones());
   int every = 1;  // steps between checks
-  // When set, the outlet removes the particles farther than `band` (m) from the grid's region
-  // cells instead (the fine level of a hierarchy: particles leaving its region; the band keeps
-  // the grains its insertion shells place with the centre just outside a face), books them per
-  // interface face (the nearest one), and `region` is not used.
-  std::shared_ptr<const ExchangeGrid> keep;
-  Real band = 0;
-  std::size_t keep_faces = 0;  // the grid's number of interface faces
+  // Interface faces the removed mass is booked on (0: none). A level's region outlet
+  // (Level::add_region_outlet: the fine level of a hierarchy) sets it to its grid's face count;
+  // the level then decides which particles leave and on which face they are booked.
+  std::size_t keep_faces = 0;
 };
 
 class Outlet {

@@ -1,16 +1,13 @@
+// Level: construction, configuration (materials, interactions, gravity, time step, skin,
+// dimension), adding and placing particles, and the diagnostics read from Python.
 #include "level/level.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <sstream>
 
-#include "contact/pair_loop.hpp"
-#include "contact/wall_loop.hpp"
 #include "core/errors.hpp"
 #include "integrate/time_step.hpp"
-#include "integrate/velocity_verlet.hpp"
-#include "parallel/migration.hpp"
 #include "state/body_shape.hpp"
 
 namespace grainscale {
@@ -18,24 +15,10 @@ namespace grainscale {
 Level::Level(const Domain& domain, Communicator comm)
     : domain_(domain),
       law_(make_contact_law("hertz", "none", ContactSettings{})),
-      comm_(std::move(comm)) {
-  if (comm_.parallel()) balance_every_ = 500;
-}
+      comm_(std::move(comm)),
+      partition_(comm_.parallel()) {}
 
 namespace {
-
-// Adds the wall-clock time of its scope to `total`.
-class ScopedTimer {
- public:
-  explicit ScopedTimer(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  ~ScopedTimer() {
-    total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
- private:
-  double& total_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 void validate(const Interaction& in) {
   if (!(in.restitution >= 0 && in.restitution <= 1))
@@ -111,8 +94,8 @@ void Level::set_contact_law(const ContactLaw& law) {
   lists_valid_ = false;
   forces_valid_ = false;
   // A different law has a different history layout: contacts restart from zero.
-  pair_carry_ = HistoryCarry();
-  wall_carry_ = HistoryCarry();
+  contacts_.pair_carry = HistoryCarry();
+  contacts_.wall_carry = HistoryCarry();
 }
 
 void Level::set_gravity(const Vec3& g) {
@@ -132,7 +115,7 @@ void Level::set_time_step(Real dt, bool force) {
 
 void Level::set_dimension(int dimension) {
   if (dimension != 2 && dimension != 3) throw_invalid("Simulation.dimension", "2 or 3", dimension);
-  if (next_id_ > 0 || !streams_.empty())
+  if (next_id_ > 0 || !insertion_.streams().empty())
     throw_invalid("Simulation.dimension", "set before particles or streams are added", dimension);
   dimension_ = dimension;
 }
@@ -189,7 +172,7 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
   lists_valid_ = false;
   forces_valid_ = false;
   ps_.clear_ghosts();
-  ghosts_.clear();
+  ghosts().clear();
   ensure_decomposition();
   const GlobalId first = next_id_;
   std::vector<char> mine(n, 1);
@@ -220,7 +203,7 @@ GlobalId Level::add_particles(Index n, const Real* position, const Real* velocit
       w[0] = w[1] = 0;
     }
     ps_.add_owned(next_id_++, x, v, w, r, m, particle_inertia(m, r, dimension_), material[k]);
-    origin_.push_back(-1);
+    contacts_.origin.push_back(-1);
   }
   return first;
 }
@@ -247,294 +230,33 @@ Real Level::smallest_rayleigh_time() const {
 std::vector<std::array<GlobalId, 2>> Level::neighbor_pairs() const {
   std::vector<std::array<GlobalId, 2>> out;
   if (!lists_valid_) return out;
+  const ContactList& pairs = contacts_.pairs;
   for (Index i = 0; i < ps_.n_owned(); ++i)
-    for (Index k = pairs_.first[i]; k < pairs_.first[i + 1]; ++k)
-      out.push_back({ps_.id[i], ps_.id[pairs_.partner[k]]});
+    for (Index k = pairs.first[i]; k < pairs.first[i + 1]; ++k)
+      out.push_back({ps_.id[i], ps_.id[pairs.partner[k]]});
   return out;
 }
 
-void Level::prepare() {
-  if (!law_prepared_) {
-    const std::vector<Interaction> table = interaction_table();
-    std::visit([&](auto& law) { law.prepare(materials_, table); }, law_);
-    for (Wall& w : walls_) w.law_material = w.material < 0 ? materials_.rigid_index() : w.material;
-    const int stride = history_size(law_);
-    pairs_.history_stride = stride;
-    wall_contacts_.history_stride = stride;
-    law_prepared_ = true;
-  }
-  ensure_decomposition();
-  if (!(dt_ > 0)) throw_invalid("Simulation.time_step", "set to a positive value (s)", dt_);
-  if (!(skin_ > 0)) throw_invalid("Simulation.skin", "set to a positive value (m)", skin_);
-  if (!force_dt_ && comm_.any(ps_.n_owned() > 0)) {
-    const Real t_r = smallest_rayleigh_time();
-    if (dt_ > kMaxRayleighFraction * t_r) {
-      std::ostringstream c;
-      c.precision(6);
-      c << "at most 0.3 x the smallest Rayleigh time (" << kMaxRayleighFraction * t_r
-        << " s); pass force_time_step=True to override";
-      throw_invalid("Simulation.time_step", c.str(), dt_);
+GlobalId Level::place_particles(const std::vector<Vec3>& x, const std::vector<Real>& r,
+                                const Vec3& velocity, const Vec3* spin, std::int32_t material) {
+  const Index n = static_cast<Index>(r.size());
+  std::vector<Real> flat(3 * n), v(3 * n), w(spin ? 3 * n : 0);
+  for (Index k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) {
+      flat[3 * k + a] = x[k][a];
+      v[3 * k + a] = velocity[a];
+      if (spin) w[3 * k + a] = (*spin)[a];
     }
-  }
-  validate_periodic_lengths();
+  const std::vector<std::int32_t> mat(n, material);
+  return add_particles(n, flat.data(), v.data(), spin ? w.data() : nullptr, r.data(), mat.data());
 }
 
-void Level::validate_periodic_lengths() const {
-  Real r_max = 0;
-  for (Index i = 0; i < ps_.n_owned(); ++i) r_max = std::max(r_max, ps_.radius[i]);
-  const Real cutoff = 2 * comm_.max(r_max) + skin_;
-  for (int a = 0; a < 3; ++a)
-    if (domain_.periodic[a] && domain_.length()[a] < 2 * cutoff) {
-      std::ostringstream c;
-      c << "at least 2 x (largest diameter + skin) = " << 2 * cutoff << " m along periodic axis "
-        << "xyz"[a];
-      throw_invalid("Box.hi - Box.lo", c.str(), domain_.length()[a]);
-    }
-}
-
-void Level::save_histories() {
-  // Key every entry by its partner (global id / wall index) while the indices are valid.
-  std::vector<GlobalId>& keys = scratch_keys_;
-  keys.resize(pairs_.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
-  pair_carry_.save(pairs_, keys);
-  keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
-  wall_carry_.save(wall_contacts_, keys);
-  origin_.resize(ps_.n_owned());
-  for (Index i = 0; i < ps_.n_owned(); ++i) origin_[i] = i;
-  pairs_.partner.clear();
-  wall_contacts_.partner.clear();
-}
-
-void Level::rebuild() {
-  const auto started = std::chrono::steady_clock::now();
-  std::string unstable;
-  for (Index i = 0; i < ps_.n_owned() && unstable.empty(); ++i)
-    if (!ps_.position[i].allFinite() || !ps_.velocity[i].allFinite()) {
-      std::ostringstream msg;
-      msg << "particle " << ps_.id[i] << " has a non-finite position or velocity at step " << step_
-          << ": the simulation is unstable (time step too large for the stiffness?)";
-      unstable = msg.str();
-    }
-  comm_.raise_if_any(unstable);  // every rank raises, none waits in the exchanges below
-  if (lists_valid_) save_histories();
-  ps_.clear_ghosts();
-  ghosts_.clear();
-  wrap_periodic(ps_, domain_);
-  drop_lost();
-  ensure_decomposition();
-
-  Real r_max = 0, r_min = INFINITY;
-  for (Index i = 0; i < ps_.n_owned(); ++i) {
-    r_max = std::max(r_max, ps_.radius[i]);
-    r_min = std::min(r_min, ps_.radius[i]);
-  }
-  r_max = comm_.max(r_max);
-  r_min = comm_.min(r_min);
-  const Real cutoff = 2 * r_max + skin_;
-  const Real size_ratio = r_max / r_min;
-  if (comm_.parallel()) {
-    // Balanced slabs keep a margin over the cut-off: it grows when larger particles arrive.
-    const Real min_width = 1.25 * cutoff;
-    if (balance_every_ > 0 && step_ - balanced_at_step_ >= balance_every_) {
-      const std::vector<Real> work = particle_work();
-      if (imbalance(work) > balance_threshold_) balance_cuts(min_width, work);
-      balanced_at_step_ = step_;
-    }
-    // A cut-off grown past a balanced slab's width: move the cuts (the same on every rank).
-    if (!(decomposition_.narrowest_slab() >= cutoff)) balance_cuts(min_width, particle_work());
-    const Real narrowest = decomposition_.narrowest_slab();
-    if (!(narrowest >= cutoff)) {
-      std::ostringstream c;
-      c << "such that every subdomain is at least the ghost cut-off 2 r_max + skin = "
-        << shortest(cutoff) << " m wide (use fewer ranks along the narrow axis); narrowest slab";
-      throw_invalid("Simulation.processor_grid", c.str(), narrowest);
-    }
-    migrate(ps_, origin_, pair_carry_, wall_carry_, domain_, decomposition_, comm_);
-  }
-
-  // Spatial sort (owned particles in cell order, for cache locality in the force loop).
-  grid_.build_for_pairs(ps_.position.data(), ps_.n_owned(), cutoff, size_ratio);
-  std::vector<Index>& order = scratch_order_;
-  order.assign(grid_.particles.begin(), grid_.particles.end());
-  ps_.select_owned(order);
-  std::vector<Index>& new_origin = scratch_index_;
-  new_origin.resize(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k) new_origin[k] = origin_[order[k]];
-  origin_.swap(new_origin);
-
-  ghosts_.build(ps_, domain_, decomposition_, comm_, cutoff);
-  // Without ghosts the sorted particles fill the same cells in order: the grid only needs
-  // renumbering, not a second binning.
-  if (ps_.n_ghost() == 0)
-    grid_.renumber_sorted();
-  else
-    grid_.build_for_pairs(ps_.position.data(), ps_.n_local(), cutoff, size_ratio);
-  build_pair_list(ps_, grid_, cutoff, skin_, pairs_);
-  // Mesh bins: once for a wall at rest, again after it moved or the reach grew.
-  const Real margin = r_max + skin_;
-  for (std::size_t w = 0; w < walls_.size(); ++w) {
-    if (walls_[w].shape != WallShape::Mesh) continue;
-    if (!mesh_bins_valid_[w] || w >= wall_shift_.size() || wall_shift_[w] > 0 ||
-        margin > mesh_bin_margin_)
-      walls_[w].mesh->build_bins(margin, cutoff);
-    mesh_bins_valid_[w] = 1;
-  }
-  mesh_bin_margin_ = std::max(mesh_bin_margin_, margin);
-  build_wall_list(ps_, walls_, primitives_.first, skin_, wall_contacts_);
-
-  std::vector<GlobalId>& keys = scratch_keys_;
-  keys.resize(pairs_.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs_.partner[k]];
-  pair_carry_.restore(origin_, keys, pairs_);
-  keys.assign(wall_contacts_.partner.begin(), wall_contacts_.partner.end());
-  wall_carry_.restore(origin_, keys, wall_contacts_);
-  pair_carry_.clear();
-  wall_carry_.clear();
-
-  x_at_build_.assign(ps_.position.data(), ps_.position.data() + ps_.n_owned());
-  drift_bound_ = 0;
-  wall_shift_.assign(walls_.size(), 0);
-  lists_valid_ = true;
-  ++rebuilds_;
-  rebuild_seconds_ +=
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-}
-
-template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
-void Level::compute_forces(const Law& law, bool defer_reverse) {
-  const Index n = ps_.n_owned();
-  if constexpr (!kOwnedReset)
-    for (Index i = 0; i < n; ++i) {
-      ps_.force[i] = ps_.mass[i] * gravity_;
-      ps_.torque[i].setZero();
-    }
-  for (Index g = n; g < ps_.n_local(); ++g) {
-    ps_.force[g].setZero();
-    ps_.torque[g].setZero();
-  }
-  for (Wall& w : walls_) {
-    w.force.setZero();
-    w.torque.setZero();
-  }
-  for (const CouplingForces& c : couplings_) c.apply(ps_, domain_, dt_, coupling_push_scale(c));
-  if constexpr (kStats) stats_.clear();
-  accumulate_pair_forces<Law, kUpdate, kStats>(law, ps_, pairs_, dt_, stats_);
-  // The ghost forces travel while the walls are computed (and, deferred, while the particles
-  // that did not send ghosts are integrated); walls act on owned particles only.
-  ghosts_.reverse_begin(ps_, comm_);
-  accumulate_wall_forces<Law, kUpdate, kStats>(law, ps_, walls_, primitives_, wall_contacts_, dt_,
-                                               stats_);
-  if (defer_reverse && !ghosts_.deferred().empty()) {
-    reverse_pending_ = true;
-  } else {
-    const ScopedTimer timer(halo_seconds_);
-    ghosts_.reverse_end(ps_, comm_);
-  }
-  if (comm_.parallel()) {
-    const ScopedTimer timer(halo_seconds_);
-    // Servo walls move by the total load every step; other loads are read after a run.
-    if (kStats || any_servo_) reduce_wall_loads();
-    if constexpr (kStats) reduce_stats();
-  }
-}
-
-template <bool kPlanar, class Law>
-void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
-  // Ranks agree first: one rank's particles changed from Python means every rank rebuilds.
-  // A set-up evaluation with valid lists first refreshes the ghosts: their velocities are those
-  // of the last force evaluation, not of the closing kick or of changes made from Python.
-  if (comm_.any(!lists_valid_))
-    rebuild();
-  else if (comm_.any(!forces_valid_))
-    ghosts_.forward(ps_, comm_);
-  if (comm_.any(!forces_valid_)) compute_forces<Law, false, true, false>(law);
-  forces_valid_ = true;
-  const Real half_skin = 0.5 * skin_;
-  for (std::int64_t s = 0; s < steps; ++s) {
-    // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
-    // which also resets the owned forces to m g.
-    Real max_v2;
-    if (reverse_pending_) {
-      // The particles whose forces are complete move first, the others once theirs arrived.
-      max_v2 = kick_drift_except<kPlanar>(ps_, dt_, gravity_, ghosts_.deferred_mask());
-      {
-        const ScopedTimer timer(halo_seconds_);
-        ghosts_.reverse_end(ps_, comm_);
-      }
-      reverse_pending_ = false;
-      max_v2 =
-          larger_or_nan(max_v2, kick_drift_only<kPlanar>(ps_, dt_, gravity_, ghosts_.deferred()));
-    } else {
-      max_v2 = s == 0 ? kick_drift<kPlanar, false>(ps_, dt_, gravity_)
-                      : kick_drift<kPlanar, true>(ps_, dt_, gravity_);
-    }
-    Real wall_shift = 0;
-    for (std::size_t k = 0; k < walls_.size(); ++k) {
-      wall_shift_[k] += walls_[k].advance(dt_, wall_reach_[k]);
-      wall_shift = std::max(wall_shift, wall_shift_[k]);
-    }
-    ++step_;
-    time_ = time_at_dt_change_ + (step_ - step_at_dt_change_) * dt_;
-    apply_insertions_and_outlets();  // may add/remove particles: lists become invalid
-    // Inserted particles start with zero force: then the owned forces are set again.
-    const bool owned_reset = lists_valid_;
-    // One reduction decides for all ranks (a rank that inserted or removed particles counts as
-    // having moved infinitely far; NaN becomes infinity too). The list is rebuilt when a
-    // particle has moved more than half the skin since the last build: the drift speeds bound
-    // the displacements, and only when the bound reaches half the skin are they measured (the
-    // same decisions as measuring every step, without reading the build positions each step).
-    Real speed2_all;
-    {
-      const ScopedTimer timer(halo_seconds_);
-      speed2_all = comm_.max(lists_valid_ ? max_v2 : INFINITY);
-    }
-    drift_bound_ += dt_ * std::sqrt(speed2_all);
-    bool stale = !(drift_bound_ + wall_shift <= half_skin);
-    if (stale && std::isfinite(speed2_all)) {
-      const Real moved2 = max_displacement2(ps_, x_at_build_);
-      Real moved2_all;
-      {
-        const ScopedTimer timer(halo_seconds_);
-        moved2_all = comm_.max(moved2);
-      }
-      drift_bound_ = std::sqrt(moved2_all);
-      stale = !(drift_bound_ + wall_shift <= half_skin);
-    }
-    if (stale) {
-      rebuild();
-    } else {
-      const ScopedTimer timer(halo_seconds_);
-      ghosts_.forward(ps_, comm_);
-    }
-    // Only a step followed by another in this run leaves its ghost forces travelling.
-    const bool last = s + 1 == steps;
-    if (last && stats)
-      compute_forces<Law, true, true, false>(law);
-    else if (owned_reset)
-      compute_forces<Law, true, false, true>(law, !last);
-    else
-      compute_forces<Law, true, false, false>(law, !last);
-  }
-  // The wall loads are read after a run: summed over the ranks at the last step in any case.
-  if (steps > 0 && !stats && comm_.parallel() && !any_servo_) {
-    const ScopedTimer timer(halo_seconds_);
-    reduce_wall_loads();
-  }
-  if (steps > 0) kick<kPlanar>(ps_, dt_);
-}
-
-void Level::run(std::int64_t steps, bool stats) {
-  if (steps < 0) throw_invalid("Simulation.run.steps", "non-negative", steps);
-  prepare();
-  std::visit(
-      [&](const auto& law) {
-        if (dimension_ == 2)
-          run_with<true>(law, steps, stats);
-        else
-          run_with<false>(law, steps, stats);
-      },
-      law_);
+InsertionSite Level::insertion_site(const Vec3& lo, const Vec3& hi, Real max_new_radius) const {
+  Real r_old = 0;
+  const SphereSet present =
+      partition_.gather_nearby(lo, hi, max_new_radius, r_old, ps_, domain_, comm_);
+  return InsertionSite{OccupancyGrid(lo, hi, max_new_radius, r_old, present, domain_),
+                       WallClearance(walls_.walls(), lo, hi, max_new_radius)};
 }
 
 }  // namespace grainscale

@@ -1,37 +1,41 @@
 // Level: one complete DEM system — particles, neighbour lists with contact history, contact
-// law, walls, ghost exchange and time step. A simulation is one level; an MLCG hierarchy (later)
-// holds several. Python decides what runs and when; run(steps) executes whole steps in C++.
+// law, walls, ghost exchange and time step. A simulation is one level; an MLCG hierarchy holds
+// several. Python decides what runs and when; run(steps) executes whole steps in C++.
 //
-// Under MPI a level is decomposed over the ranks of its Communicator (level/level_parallel.cpp):
-// every rank runs the same calls (SPMD) with the same arguments, owns the particles of its
-// subdomain and holds ghosts of its neighbours'. Set-up is replicated (materials, law, walls,
-// inserters); insertion places the same particles on every rank and each keeps its own; results
-// that Python reads (energies, wall loads, outlet masses, counts) are reduced over the ranks.
-// Calls marked "collective" must be made on every rank.
+// The level orders a step (level/level_step.cpp: kick and drift, walls, the insertion hook, list
+// rebuild, forces) and holds the owners of its parts: the wall set (level/wall_set.hpp),
+// insertion and outlets (level/insertion.hpp), the spread over the ranks (level/partition.hpp),
+// the contact lists and carried histories (level/contact_state.hpp) and the forces that higher
+// floors add every step (level/force_hook.hpp). Checkpoints are written and read by
+// level/level_serializer.hpp.
+//
+// Under MPI a level is decomposed over the ranks of its Communicator: every rank runs the same
+// calls (SPMD) with the same arguments, owns the particles of its subdomain and holds ghosts of
+// its neighbours'. Set-up is replicated (materials, law, walls, inserters); insertion places the
+// same particles on every rank and each keeps its own; results that Python reads (energies, wall
+// loads, outlet masses, counts) are reduced over the ranks. Calls marked "collective" must be
+// made on every rank.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "contact/contact_law.hpp"
 #include "contact/contact_stats.hpp"
-#include "contact/wall_loop.hpp"
-#include "coupling/coupling_forces.hpp"
-#include "coupling/flux_inserter.hpp"
 #include "geometry/wall.hpp"
-#include "insert/outlet.hpp"
-#include "insert/pack.hpp"
-#include "insert/stream.hpp"
+#include "level/contact_state.hpp"
+#include "level/force_hook.hpp"
+#include "level/insertion.hpp"
 #include "level/level_state.hpp"
+#include "level/partition.hpp"
+#include "level/wall_set.hpp"
 #include "neighbor/cell_grid.hpp"
-#include "neighbor/neighbor_list.hpp"
 #include "parallel/communicator.hpp"
 #include "parallel/decomposition.hpp"
-#include "parallel/ghost_exchange.hpp"
-#include "state/contact_history.hpp"
 #include "state/domain.hpp"
 #include "state/material_table.hpp"
 #include "state/particle_store.hpp"
@@ -55,6 +59,7 @@ class Level {
   const Vec3& gravity() const { return gravity_; }
   void set_time_step(Real dt, bool force);
   Real time_step() const { return dt_; }
+  bool force_time_step() const { return force_dt_; }
   void set_skin(Real skin);
   Real skin() const { return skin_; }
   const Domain& domain() const { return domain_; }
@@ -70,15 +75,28 @@ class Level {
   GlobalId add_particles(Index n, const Real* position, const Real* velocity,
                          const Real* angular_velocity, const Real* radius,
                          const std::int32_t* material);
+  // Places particles found room for at an insertion site, all with one velocity, spin (may be
+  // null: none) and material (collective: every rank the same particles, each keeps its own);
+  // returns the global id of the first. The placement primitive of packing, streams and the
+  // hierarchy's flux insertion (coupling/flux_insertion.hpp).
+  GlobalId place_particles(const std::vector<Vec3>& position, const std::vector<Real>& radius,
+                           const Vec3& velocity, const Vec3* spin, std::int32_t material);
+  // Collective: the occupancy of every rank's particles near the box [lo, hi] for new particles
+  // of radius at most max_new_radius, and the clearance of the walls where they are now.
+  InsertionSite insertion_site(const Vec3& lo, const Vec3& hi, Real max_new_radius) const;
+  // The global id the next particle added will get.
+  GlobalId next_id() const { return next_id_; }
+
   // Validates and adds a wall (plane, rectangle, cylinder or triangle mesh); returns its index.
   int add_wall(const Wall& wall);
-  std::vector<Wall>& walls() { return walls_; }
+  std::vector<Wall>& walls() { return walls_.walls(); }
+  const WallSet& wall_set() const { return walls_; }
   // Changes a wall's motion (translation, rotation about origin) or servo control.
   void set_wall_motion(int index, const Vec3& velocity, const Vec3& angular_velocity,
                        const Vec3& origin);
   void set_wall_servo(int index, const Servo& servo);
 
-  // --- parallel runs (level/level_parallel.cpp) ---
+  // --- parallel runs (level/partition.hpp) ---
   const Communicator& comm() const { return comm_; }
   // Processor grid (px, py, pz) with px py pz = ranks; set before any particle exists.
   // Default: chosen from the box shape (choose_processor_grid).
@@ -87,7 +105,7 @@ class Level {
   // Collective. Moves the cuts so that the slabs hold equal shares of the work (particles move at
   // the next list build); returns the imbalance (largest rank's work / mean) before and after.
   // The work of a particle is 1 + 0.8 per list entry + 2 per touching contact (of those it
-  // stores: each pair counts once), a deterministic estimate (level_parallel.cpp), so balanced
+  // stores: each pair counts once), a deterministic estimate (level/partition.cpp), so balanced
   // runs stay reproducible.
   std::pair<Real, Real> balance();
   // Collective when set: at list builds at least `every` steps apart, balance() when the
@@ -109,7 +127,7 @@ class Level {
   void mark_positions_changed();
   void mark_velocities_changed() { forces_valid_ = false; }
 
-  // --- checkpoint (level/level_state.cpp) ---
+  // --- checkpoint (level/level_serializer.cpp) ---
   // Everything needed to continue bit-identically; load_state needs the same set-up
   // (materials, law, walls, inserters), checked through signature().
   // Collective. save_state is this rank's part; load_state takes the part of the same rank
@@ -148,7 +166,7 @@ class Level {
   // Pairs (global ids) of this rank's current particle list, each unordered pair once.
   std::vector<std::array<GlobalId, 2>> neighbor_pairs() const;
 
-  // --- insertion and outlets (level/level_insert.cpp) ---
+  // --- insertion and outlets (level/insertion.hpp) ---
   // Packs particles into a region without overlaps, with each other and with the particles
   // present; returns the global id of the first and the count (ids are consecutive, largest
   // particle first). Throws std::runtime_error, inserting nothing, if the target is out of reach.
@@ -157,8 +175,11 @@ class Level {
   // result does not depend on how Python chunks run(). Returns the index.
   int add_stream(const StreamSpec& spec);
   int add_outlet(const OutletSpec& spec);
-  std::vector<StreamInserter>& streams() { return streams_; }
-  std::vector<Outlet>& outlets() { return outlets_; }
+  // An outlet that removes the particles leaving `keep`'s region cells (insertion.hpp).
+  int add_region_outlet(const OutletSpec& spec, std::shared_ptr<const ExchangeGrid> keep,
+                        Real band);
+  std::vector<StreamInserter>& streams() { return insertion_.streams(); }
+  std::vector<Outlet>& outlets() { return insertion_.outlets(); }
   // Deletes owned particles by index (order irrelevant, repeats ignored) keeping the contact
   // histories of the survivors (the forces are then those of the step before: the per-step hook
   // recomputes them). remove_particles (collective) does it by global id, every rank given the
@@ -167,24 +188,21 @@ class Level {
   void remove_owned(const std::vector<Index>& indices);
   std::int64_t remove_particles(const std::vector<GlobalId>& ids);
   // Smallest Rayleigh time (s) of the particles the streams may insert (inf without streams).
-  Real smallest_insertion_rayleigh_time() const;
-  // Collective: places what the inserters owe (each its scheduled particles, in order; every
-  // rank the same particles, each keeps its own) with their velocity and spin; returns the
-  // number placed.
-  std::int64_t insert_flux(std::vector<FluxInserter>& inserters);
+  Real smallest_insertion_rayleigh_time() const {
+    return insertion_.smallest_rayleigh_time(materials_);
+  }
   // --- end insertion and outlets ---
 
-  // --- hierarchy coupling (coupling/) ---
-  // Forces from another level, applied every step after the force reset; returns the index.
-  int add_coupling(CouplingForces forces);
-  CouplingForces& coupling(int index);
-  // Collective: coupling(index).push_moment summed over the ranks (N m per interface face).
-  std::vector<Real> coupling_push_moment(int index);
-  // The scale of each face's push (collective: sums the push totals over the ranks).
-  std::vector<Real> coupling_push_scale(const CouplingForces& c);
-  // --- end hierarchy coupling ---
+  // --- forces added by higher floors (level/force_hook.hpp) ---
+  // Applied at every force evaluation after the force reset, in the order added; returns the
+  // index. The forces are re-evaluated before the next step.
+  int add_force_hook(std::shared_ptr<ForceHook> hook);
+  int force_hook_count() const { return static_cast<int>(force_hooks_.size()); }
+  ForceHook& force_hook(int index) { return *force_hooks_.at(index); }
 
  private:
+  friend class LevelSerializer;
+
   template <bool kPlanar, class Law>
   void run_with(const Law& law, std::int64_t steps, bool stats);
   // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
@@ -192,36 +210,22 @@ class Level {
   // defer_reverse: leaves the ghost forces travelling (GhostExchange::reverse_begin); the next
   // step's kick completes them (reverse_pending_).
   void compute_forces(const Law& law, bool defer_reverse = false);
+  // Collective: rebuilds the lists if needed and evaluates the forces (without advancing the
+  // histories) if needed: what run() does first, and save_state before saving.
+  void refresh_forces();
   void prepare();
   void validate_periodic_lengths() const;
-  // --- parallel runs (level/level_parallel.cpp) ---
-  void ensure_decomposition();
-  bool owns(const Vec3& x) const { return decomposition_.owner(x, domain_) == comm_.rank(); }
+  void ensure_decomposition() { partition_.ensure(domain_, comm_, dimension_); }
+  bool owns(const Vec3& x) const { return partition_.owns(x, domain_, comm_); }
+  GhostExchange& ghosts() { return partition_.ghosts(); }
   // Drops owned particles outside the closed sides of the box (counted as lost).
   void drop_lost();
-  // Work of every owned particle (see balance()), from the carried histories: requires lists
-  // invalid (histories saved).
-  std::vector<Real> particle_work() const;
-  // Cut positions for equal work along every split axis, slabs at least `min_width` wide.
-  void balance_cuts(Real min_width, const std::vector<Real>& work);
-  // Largest rank's total work / mean; collective.
-  Real imbalance(const std::vector<Real>& work) const;
-  // Every rank's nearby spheres of an insertion box, on every rank (OccupancyGrid input).
-  SphereSet gather_nearby(const Vec3& lo, const Vec3& hi, Real max_new_radius, Real& r_old) const;
-  // After a force evaluation: the wall loads (and the contact statistics) summed over the ranks.
-  void reduce_wall_loads();
   void reduce_stats();
-  // --- end parallel runs ---
   std::vector<Interaction> interaction_table() const;
   void save_histories();
   void rebuild();
-  void save_insertion_state(LevelState& state) const;
-  void check_signature(const LevelState& state) const;
-  void load_scalars(const LevelState& state, std::int64_t lost, Real lost_mass);
-  void load_walls(const LevelState& state);
-  void load_insertion_state(const LevelState& state);
-  // Insertion and outlets (level/level_insert.cpp): runs once per step after the drift;
-  // adding or removing particles invalidates the lists, so the step rebuilds them.
+  // Insertion and outlets: runs once per step after the drift; adding or removing particles
+  // invalidates the lists, so the step rebuilds them.
   void apply_insertions_and_outlets();
 
   Domain domain_;
@@ -236,25 +240,11 @@ class Level {
   int dimension_ = 3;
 
   ParticleStore ps_;
-  std::vector<Wall> walls_;
-  WallPrimitives primitives_;
-  std::vector<Real> wall_shift_;  // how far each wall may have moved since the last build
-  std::vector<Real> wall_reach_;  // largest distance of a wall point that matters from origin
-  std::vector<char> mesh_bins_valid_;
-  Real mesh_bin_margin_ = -1;
-  ContactList pairs_, wall_contacts_;
-  HistoryCarry pair_carry_, wall_carry_;
-  std::vector<Index> origin_;  // per owned particle: index when histories were saved, or -1
+  WallSet walls_;
+  ContactState contacts_;  // lists, carried histories and each particle's row in them
   CellGrid grid_;
-  GhostExchange ghosts_;
   Communicator comm_;
-  Decomposition decomposition_;
-  std::array<int, 3> requested_grid_{0, 0, 0};  // 0: choose from the box shape
-  bool decomposed_ = false;
-  std::int64_t balance_every_ = 0;  // set in the constructor for parallel runs
-  Real balance_threshold_ = 1.05;
-  std::int64_t balanced_at_step_ = 0;
-  bool any_servo_ = false;
+  Partition partition_;  // after comm_: initialised from it
   std::vector<Vec3> x_at_build_;
   // Upper bound of any owned particle's displacement from x_at_build_ (m): the drift speeds'
   // sum over the steps since the build, tightened to the exact maximum whenever it is checked.
@@ -281,15 +271,8 @@ class Level {
   bool reverse_pending_ = false;  // ghost forces still travelling (compute_forces)
   bool law_prepared_ = false;
 
-  // --- insertion and outlets (level/level_insert.cpp) ---
-  void apply_outlets();
-  // The pack spec of the 2-D mode: discs in the plane, inside the region's x-y rectangle.
-  PackSpec planar_pack_spec(const PackSpec& spec) const;
-  void run_streams();
-  std::vector<StreamInserter> streams_;
-  std::vector<Outlet> outlets_;
-  std::vector<CouplingForces> couplings_;
-  // --- end insertion and outlets ---
+  Insertion insertion_;
+  std::vector<std::shared_ptr<ForceHook>> force_hooks_;
 };
 
 }  // namespace grainscale

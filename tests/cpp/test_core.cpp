@@ -32,8 +32,8 @@
 #include "contact/tangential_models.hpp"
 #include "core/errors.hpp"
 #include "neighbor/cell_grid.hpp"
+#include "neighbor/contact_history.hpp"
 #include "neighbor/neighbor_list.hpp"
-#include "state/contact_history.hpp"
 #include "state/material_table.hpp"
 #include "state/particle_store.hpp"
 

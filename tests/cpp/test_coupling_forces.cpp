@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "coupling/coupling_forces.hpp"
-#include "coupling/exchange_grid.hpp"
 #include "expect.hpp"
+#include "field/exchange_grid.hpp"
 #include "insert/region.hpp"
 #include "state/domain.hpp"
 #include "state/particle_store.hpp"

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "coupling/exchange_grid.hpp"
 #include "coupling/flux_inserter.hpp"
 #include "expect.hpp"
+#include "field/exchange_grid.hpp"
 #include "insert/occupancy_grid.hpp"
 #include "insert/size_distribution.hpp"
 #include "insert/wall_clearance.hpp"

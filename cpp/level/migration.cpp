@@ -1,4 +1,4 @@
-#include "parallel/migration.hpp"
+#include "level/migration.hpp"
 
 #include <cstring>
 #include <stdexcept>

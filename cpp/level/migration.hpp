@@ -1,7 +1,7 @@
 // Migration: owned particles whose centre has moved into another rank's subdomain go to that
 // rank at a list rebuild, together with their contact histories (DESIGN.md 2.3, 5).
 //
-// Histories are carried (state/contact_history.hpp) keyed by the partner's global id, or the
+// Histories are carried (neighbor/contact_history.hpp) keyed by the partner's global id, or the
 // wall primitive, at the particle that stores the pair: it travels with that particle and is
 // found again when the receiver rebuilds its lists. Destinations come from the cut positions, so
 // one personalised exchange also handles particles that move several ranks at once (after load
@@ -10,9 +10,9 @@
 
 #include <vector>
 
+#include "neighbor/contact_history.hpp"
 #include "parallel/communicator.hpp"
 #include "parallel/decomposition.hpp"
-#include "state/contact_history.hpp"
 #include "state/domain.hpp"
 #include "state/particle_store.hpp"
 

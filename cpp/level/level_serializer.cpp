@@ -1,41 +1,26 @@
-// Level: checkpoint state (save_state / load_state). Saving first completes any pending list
-// rebuild and set-up force evaluation — exactly what the next run() would do first — so the
-// saved state is the one a continuing run steps from.
+// LevelSerializer: checkpoint state (save / load / load_redistributed / signature) over the
+// level's parts. Saving first completes any pending list rebuild and set-up force evaluation —
+// exactly what the next run() would do first — so the saved state is the one a continuing run
+// steps from.
+#include "level/level_serializer.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "core/errors.hpp"
 #include "level/level.hpp"
+#include "level/state_io.hpp"
 
 namespace grainscale {
 
 namespace {
 
-void put(LevelState& s, const std::string& key, const Vec3* v, std::size_t n) {
-  auto& out = s.reals[key];
-  out.resize(3 * n);
-  for (std::size_t k = 0; k < n; ++k)
-    for (int c = 0; c < 3; ++c) out[3 * k + c] = v[k][c];
-}
-
-void get(const LevelState& s, const std::string& key, Vec3* v, std::size_t n) {
-  const auto& in = s.reals.at(key);
-  if (in.size() != 3 * n)
-    throw std::runtime_error("checkpoint array '" + key + "' has the wrong size");
-  for (std::size_t k = 0; k < n; ++k) v[k] = Vec3(in[3 * k], in[3 * k + 1], in[3 * k + 2]);
-}
-
-template <class T>
-void put_ints(LevelState& s, const std::string& key, const T* v, std::size_t n) {
-  s.ints[key].assign(v, v + n);
-}
-
-const std::vector<double>& reals(const LevelState& s, const std::string& key) {
-  auto it = s.reals.find(key);
-  if (it == s.reals.end()) throw std::runtime_error("checkpoint lacks '" + key + "'");
-  return it->second;
-}
+using state_io::get;
+using state_io::ints;
+using state_io::put;
+using state_io::put_ints;
+using state_io::reals;
 
 // The rank's lost mass (kg); 0 in checkpoints written before it was kept.
 Real saved_lost_mass(const LevelState& s) {
@@ -43,12 +28,6 @@ Real saved_lost_mass(const LevelState& s) {
   if (it == s.reals.end()) return 0;
   if (it->second.size() != 1) throw std::runtime_error("checkpoint lost mass is corrupt");
   return it->second[0];
-}
-
-const std::vector<std::int64_t>& ints(const LevelState& s, const std::string& key) {
-  auto it = s.ints.find(key);
-  if (it == s.ints.end()) throw std::runtime_error("checkpoint lacks '" + key + "'");
-  return it->second;
 }
 
 void put_list(LevelState& s, const std::string& key, const ContactList& l) {
@@ -135,73 +114,49 @@ void put_decomposition(LevelState& s, const Decomposition& d, int ranks) {
 
 }  // namespace
 
-std::string Level::signature() const {
+std::string LevelSerializer::signature(const Level& l) {
   std::ostringstream s;
-  s << "law=" << law_name(law_) << ";materials=" << materials_.n_materials()
-    << ";walls=" << walls_.size() << ";primitives=" << primitives_.wall.size()
-    << ";streams=" << streams_.size() << ";outlets=" << outlets_.size()
-    << ";periodic=" << domain_.periodic[0] << domain_.periodic[1] << domain_.periodic[2];
+  s << "law=" << law_name(l.law_) << ";materials=" << l.materials_.n_materials()
+    << ";walls=" << l.walls_.size() << ";primitives=" << l.walls_.primitives().wall.size()
+    << ";streams=" << l.insertion_.streams().size() << ";outlets=" << l.insertion_.outlets().size()
+    << ";periodic=" << l.domain_.periodic[0] << l.domain_.periodic[1] << l.domain_.periodic[2];
   // Only the 2-D mode is named, so 3-D checkpoints written before it existed still load.
-  if (dimension_ != 3) s << ";dimension=" << dimension_;
+  if (l.dimension_ != 3) s << ";dimension=" << l.dimension_;
   return s.str();
 }
 
-LevelState Level::save_state() {
-  prepare();
-  std::visit(
-      [&](const auto& law) {
-        if (comm_.any(!lists_valid_))
-          rebuild();
-        else if (comm_.any(!forces_valid_))
-          ghosts_.forward(ps_, comm_);  // as in run_with: ghosts as fresh as their owners
-        if (comm_.any(!forces_valid_))
-          compute_forces<std::decay_t<decltype(law)>, false, true, false>(law);
-      },
-      law_);
-  forces_valid_ = true;
+LevelState LevelSerializer::save(Level& l) {
+  l.prepare();
+  l.refresh_forces();
 
   LevelState s;
-  s.texts["signature"] = signature();
-  const std::size_t nl = ps_.n_local(), no = ps_.n_owned();
-  s.ints["scalars"] = {step_,          step_at_dt_change_, next_id_,
-                       lost_,          rebuilds_,          static_cast<std::int64_t>(no),
-                       stats_.contacts};
-  s.reals["scalars"] = {time_, time_at_dt_change_, dt_,
-                        skin_, mesh_bin_margin_,   stats_.max_overlap_ratio};
-  s.reals["counters/lost_mass"] = {lost_mass_};
-  put(s, "particles/position", ps_.position.data(), nl);
-  put(s, "particles/velocity", ps_.velocity.data(), nl);
-  put(s, "particles/angular_velocity", ps_.angular_velocity.data(), nl);
-  put(s, "particles/force", ps_.force.data(), nl);
-  put(s, "particles/torque", ps_.torque.data(), nl);
-  s.reals["particles/radius"].assign(ps_.radius.data(), ps_.radius.data() + nl);
-  s.reals["particles/mass"].assign(ps_.mass.data(), ps_.mass.data() + nl);
-  s.reals["particles/inv_mass"].assign(ps_.inv_mass.data(), ps_.inv_mass.data() + nl);
-  s.reals["particles/inv_inertia"].assign(ps_.inv_inertia.data(), ps_.inv_inertia.data() + nl);
-  s.reals["particles/inv_rolling_inertia"].assign(ps_.inv_rolling_inertia.data(),
-                                                  ps_.inv_rolling_inertia.data() + nl);
-  put_ints(s, "particles/material", ps_.material.data(), nl);
-  put_ints(s, "particles/id", ps_.id.data(), nl);
-  put_ghost_stages(s, ghosts_.stages());
-  put_decomposition(s, decomposition_, comm_.size());
-  put(s, "lists/x_at_build", x_at_build_.data(), x_at_build_.size());
-  put_list(s, "lists/pairs", pairs_);
-  put_list(s, "lists/walls", wall_contacts_);
-  s.reals["walls/shift"] = wall_shift_;
-  for (std::size_t w = 0; w < walls_.size(); ++w) {
-    const Wall& wall = walls_[w];
-    const std::string key = "walls/" + std::to_string(w) + "/";
-    const Vec3 geometry[] = {
-        wall.point,          wall.normal,           wall.edge1,  wall.edge2, wall.axis,
-        wall.velocity,       wall.angular_velocity, wall.origin, wall.force, wall.torque,
-        wall.servo.direction};
-    put(s, key + "vectors", geometry, std::size(geometry));
-    s.reals[key + "servo"] = {
-        wall.servo.enabled ? 1.0 : 0.0, wall.servo.target_force,  wall.servo.gain,
-        wall.servo.max_speed,           wall.servo.integral_gain, wall.servo.integral};
-    if (wall.mesh) put(s, key + "vertices", wall.mesh->vertices.data(), wall.mesh->vertices.size());
-  }
-  save_insertion_state(s);
+  s.texts["signature"] = signature(l);
+  const std::size_t nl = l.ps_.n_local(), no = l.ps_.n_owned();
+  s.ints["scalars"] = {l.step_,     l.step_at_dt_change_,          l.next_id_,       l.lost_,
+                       l.rebuilds_, static_cast<std::int64_t>(no), l.stats_.contacts};
+  s.reals["scalars"] = {l.time_, l.time_at_dt_change_,       l.dt_,
+                        l.skin_, l.walls_.mesh_bin_margin(), l.stats_.max_overlap_ratio};
+  s.reals["counters/lost_mass"] = {l.lost_mass_};
+  put(s, "particles/position", l.ps_.position.data(), nl);
+  put(s, "particles/velocity", l.ps_.velocity.data(), nl);
+  put(s, "particles/angular_velocity", l.ps_.angular_velocity.data(), nl);
+  put(s, "particles/force", l.ps_.force.data(), nl);
+  put(s, "particles/torque", l.ps_.torque.data(), nl);
+  s.reals["particles/radius"].assign(l.ps_.radius.data(), l.ps_.radius.data() + nl);
+  s.reals["particles/mass"].assign(l.ps_.mass.data(), l.ps_.mass.data() + nl);
+  s.reals["particles/inv_mass"].assign(l.ps_.inv_mass.data(), l.ps_.inv_mass.data() + nl);
+  s.reals["particles/inv_inertia"].assign(l.ps_.inv_inertia.data(), l.ps_.inv_inertia.data() + nl);
+  s.reals["particles/inv_rolling_inertia"].assign(l.ps_.inv_rolling_inertia.data(),
+                                                  l.ps_.inv_rolling_inertia.data() + nl);
+  put_ints(s, "particles/material", l.ps_.material.data(), nl);
+  put_ints(s, "particles/id", l.ps_.id.data(), nl);
+  put_ghost_stages(s, l.ghosts().stages());
+  put_decomposition(s, l.partition_.decomposition(), l.comm_.size());
+  put(s, "lists/x_at_build", l.x_at_build_.data(), l.x_at_build_.size());
+  put_list(s, "lists/pairs", l.contacts_.pairs);
+  put_list(s, "lists/walls", l.contacts_.walls);
+  l.walls_.save_state(s);
+  l.insertion_.save_state(s);
   return s;
 }
 
@@ -255,12 +210,12 @@ struct SavedParticles {
 
 }  // namespace
 
-void Level::check_signature(const LevelState& s) const {
+void LevelSerializer::check_signature(const Level& l, const LevelState& s) {
   auto sig = s.texts.find("signature");
   if (sig == s.texts.end()) throw std::runtime_error("checkpoint lacks its set-up signature");
-  if (sig->second != signature())
+  if (sig->second != signature(l))
     throw InvalidArgument("checkpoint was written for the set-up '" + sig->second +
-                          "', this simulation is '" + signature() + "'");
+                          "', this simulation is '" + signature(l) + "'");
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
   if (si.size() != 7 || sr.size() != 6) throw std::runtime_error("checkpoint scalars are corrupt");
@@ -273,87 +228,45 @@ void Level::check_signature(const LevelState& s) const {
 
 // Scalars shared by every rank's state (step, time, ids, time step, skin, statistics); `lost`
 // and `lost_mass` are the rank's own.
-void Level::load_scalars(const LevelState& s, std::int64_t lost, Real lost_mass) {
+void LevelSerializer::load_scalars(Level& l, const LevelState& s, std::int64_t lost,
+                                   Real lost_mass) {
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
-  step_ = si[0];
-  step_at_dt_change_ = si[1];
-  next_id_ = si[2];
-  lost_ = lost;
-  lost_mass_ = lost_mass;
-  rebuilds_ = si[4];
-  stats_.contacts = si[6];
-  time_ = sr[0];
-  time_at_dt_change_ = sr[1];
-  dt_ = sr[2];
-  skin_ = sr[3];
-  mesh_bin_margin_ = sr[4];
-  stats_.max_overlap_ratio = sr[5];
+  l.step_ = si[0];
+  l.step_at_dt_change_ = si[1];
+  l.next_id_ = si[2];
+  l.lost_ = lost;
+  l.lost_mass_ = lost_mass;
+  l.rebuilds_ = si[4];
+  l.stats_.contacts = si[6];
+  l.time_ = sr[0];
+  l.time_at_dt_change_ = sr[1];
+  l.dt_ = sr[2];
+  l.skin_ = sr[3];
+  l.walls_.set_mesh_bin_margin(sr[4]);
+  l.stats_.max_overlap_ratio = sr[5];
 }
 
-void Level::load_walls(const LevelState& s) {
-  wall_shift_ = reals(s, "walls/shift");
-  if (wall_shift_.size() != walls_.size())
-    throw std::runtime_error("checkpoint wall count differs");
-  for (std::size_t k = 0; k < walls_.size(); ++k) {
-    Wall& wall = walls_[k];
-    const std::string key = "walls/" + std::to_string(k) + "/";
-    Vec3 g[11];
-    get(s, key + "vectors", g, 11);
-    wall.point = g[0];
-    wall.normal = g[1];
-    wall.edge1 = g[2];
-    wall.edge2 = g[3];
-    wall.axis = g[4];
-    wall.velocity = g[5];
-    wall.angular_velocity = g[6];
-    wall.origin = g[7];
-    wall.force = g[8];
-    wall.torque = g[9];
-    wall.servo.direction = g[10];
-    const auto& servo = reals(s, key + "servo");
-    // 4 values: a checkpoint from before the PI servo (proportional only).
-    if (servo.size() != 4 && servo.size() != 6)
-      throw std::runtime_error("checkpoint servo state is corrupt");
-    wall.servo.enabled = servo[0] != 0;
-    wall.servo.target_force = servo[1];
-    wall.servo.gain = servo[2];
-    wall.servo.max_speed = servo[3];
-    wall.servo.integral_gain = servo.size() == 6 ? servo[4] : 0;
-    wall.servo.integral = servo.size() == 6 ? servo[5] : 0;
-    if (wall.mesh) {
-      // Own copy: the restarted mesh may not share vertices with the set-up's.
-      wall.mesh = std::make_shared<TriangleMesh>(*wall.mesh);
-      get(s, key + "vertices", wall.mesh->vertices.data(), wall.mesh->vertices.size());
-      mesh_bins_valid_[k] = 0;  // rebuilt from these vertices at the next list build
-    }
-  }
-  any_servo_ = false;
-  for (const Wall& w : walls_) any_servo_ = any_servo_ || w.servo.enabled;
-}
-
-void Level::load_state(const LevelState& s) {
-  check_signature(s);
+void LevelSerializer::load(Level& l, const LevelState& s) {
+  check_signature(l, s);
   const auto& dec = ints(s, "decomposition");
   const auto& cuts = reals(s, "decomposition/cuts");
-  if (dec[0] != comm_.size() || dec[4] != comm_.rank())
+  if (dec[0] != l.comm_.size() || dec[4] != l.comm_.rank())
     throw InvalidArgument("checkpoint state of rank " + std::to_string(dec[4]) + " of " +
                           std::to_string(dec[0]) + " cannot be loaded exactly on rank " +
-                          std::to_string(comm_.rank()) + " of " + std::to_string(comm_.size()) +
+                          std::to_string(l.comm_.rank()) + " of " + std::to_string(l.comm_.size()) +
                           " (load_redistributed takes any rank count)");
-  requested_grid_ = {static_cast<int>(dec[1]), static_cast<int>(dec[2]), static_cast<int>(dec[3])};
-  decomposition_ = Decomposition::uniform(domain_, requested_grid_, comm_.rank());
-  for (int a = 0, k = 0; a < 3; ++a)
-    for (int c = 0; c <= requested_grid_[a]; ++c) decomposition_.cuts[a][c] = cuts[k++];
-  decomposed_ = true;
+  l.partition_.restore(
+      {static_cast<int>(dec[1]), static_cast<int>(dec[2]), static_cast<int>(dec[3])}, cuts,
+      l.domain_, l.comm_);
   const auto& sr = reals(s, "scalars");
-  dt_ = sr[2];
-  skin_ = sr[3];
-  prepare();  // law tables and history layout of this set-up
-  const SavedParticles saved(s, materials_.n_materials());
+  l.dt_ = sr[2];
+  l.skin_ = sr[3];
+  l.prepare();  // law tables and history layout of this set-up
+  const SavedParticles saved(s, l.materials_.n_materials());
   const std::size_t no = saved.no, nl = saved.nl;
 
-  ps_.clear_ghosts();
+  l.ps_.clear_ghosts();
   ParticleStore fresh;
   fresh.reserve(static_cast<Index>(nl));
   for (std::size_t k = 0; k < no; ++k) saved.add_owned_to(fresh, k);
@@ -373,55 +286,57 @@ void Level::load_state(const LevelState& s) {
     fresh.material[k] = static_cast<std::int32_t>((*saved.material)[k]);
     fresh.id[k] = (*saved.id)[k];
   }
-  ps_ = std::move(fresh);
-  ghosts_.set_stages(std::move(stages), static_cast<Index>(no), comm_);
+  l.ps_ = std::move(fresh);
+  l.ghosts().set_stages(std::move(stages), static_cast<Index>(no), l.comm_);
 
-  x_at_build_.resize(no);
-  get(s, "lists/x_at_build", x_at_build_.data(), no);
-  drift_bound_ = INFINITY;  // not saved: the first step measures the displacements exactly
-  get_list(s, "lists/pairs", pairs_);
-  get_list(s, "lists/walls", wall_contacts_);
-  for (auto p : pairs_.partner)
+  l.x_at_build_.resize(no);
+  get(s, "lists/x_at_build", l.x_at_build_.data(), no);
+  l.drift_bound_ = INFINITY;  // not saved: the first step measures the displacements exactly
+  ContactState& contacts = l.contacts_;
+  get_list(s, "lists/pairs", contacts.pairs);
+  get_list(s, "lists/walls", contacts.walls);
+  for (auto p : contacts.pairs.partner)
     if (p < 0 || static_cast<std::size_t>(p) >= nl)
       throw std::runtime_error("checkpoint pair list refers to a missing particle");
-  if (pairs_.first.size() != no + 1 || wall_contacts_.first.size() != no + 1)
+  if (contacts.pairs.first.size() != no + 1 || contacts.walls.first.size() != no + 1)
     throw std::runtime_error("checkpoint contact lists do not match the particle count");
 
-  load_walls(s);
-  load_scalars(s, ints(s, "scalars")[3], saved_lost_mass(s));
-  load_insertion_state(s);
-  origin_.assign(no, -1);
-  pair_carry_ = HistoryCarry();
-  wall_carry_ = HistoryCarry();
-  lists_valid_ = true;
-  forces_valid_ = true;
+  l.walls_.load_state(s);
+  load_scalars(l, s, ints(s, "scalars")[3], saved_lost_mass(s));
+  l.insertion_.load_state(s);
+  contacts.origin.assign(no, -1);
+  contacts.pair_carry = HistoryCarry();
+  contacts.wall_carry = HistoryCarry();
+  l.lists_valid_ = true;
+  l.forces_valid_ = true;
 }
 
-void Level::load_redistributed(const std::vector<LevelState>& states) {
+void LevelSerializer::load_redistributed(Level& l, const std::vector<LevelState>& states) {
   if (states.empty()) throw std::runtime_error("checkpoint holds no rank state");
-  for (const LevelState& s : states) check_signature(s);
+  for (const LevelState& s : states) check_signature(l, s);
   const LevelState& first = states.front();
   if (static_cast<std::size_t>(ints(first, "decomposition")[0]) != states.size())
     throw std::runtime_error("checkpoint holds " + std::to_string(states.size()) +
                              " rank states, written by " +
                              std::to_string(ints(first, "decomposition")[0]) + " ranks");
   const auto& sr = reals(first, "scalars");
-  dt_ = sr[2];
-  skin_ = sr[3];
-  prepare();  // law tables, history layout and this run's decomposition
-  const int stride = history_size(law_);
+  l.dt_ = sr[2];
+  l.skin_ = sr[3];
+  l.prepare();  // law tables, history layout and this run's decomposition
+  const int stride = history_size(l.law_);
 
   // Every saved owned particle that lies in this rank's subdomain, with the touching entries of
   // the pairs it stores (keyed by the partner's id) and of its wall contacts (primitive index).
-  ps_.clear_ghosts();
-  ghosts_.clear();
+  l.ps_.clear_ghosts();
+  l.ghosts().clear();
   ParticleStore fresh;
-  pair_carry_.start(stride);
-  wall_carry_.start(stride);
+  ContactState& contacts = l.contacts_;
+  contacts.pair_carry.start(stride);
+  contacts.wall_carry.start(stride);
   std::int64_t lost = 0;
   Real lost_mass = 0;
   for (const LevelState& s : states) {
-    const SavedParticles saved(s, materials_.n_materials());
+    const SavedParticles saved(s, l.materials_.n_materials());
     ContactList pairs, walls;
     pairs.history_stride = walls.history_stride = stride;
     get_list(s, "lists/pairs", pairs);
@@ -445,31 +360,36 @@ void Level::load_redistributed(const std::vector<LevelState>& states) {
       out.append_row(keys.data(), values.data(), static_cast<Index>(keys.size()));
     };
     for (std::size_t k = 0; k < saved.no; ++k) {
-      if (!owns(saved.x[k])) continue;
+      if (!l.owns(saved.x[k])) continue;
       saved.add_owned_to(fresh, k);
-      carry(pairs, k, true, pair_carry_);
-      carry(walls, k, false, wall_carry_);
+      carry(pairs, k, true, contacts.pair_carry);
+      carry(walls, k, false, contacts.wall_carry);
     }
     lost += ints(s, "scalars")[3];
     lost_mass += saved_lost_mass(s);
   }
-  ps_ = std::move(fresh);
-  origin_.resize(ps_.n_owned());
-  for (Index i = 0; i < ps_.n_owned(); ++i) origin_[i] = i;
-  pairs_ = ContactList();
-  wall_contacts_ = ContactList();
-  pairs_.history_stride = wall_contacts_.history_stride = stride;
-  x_at_build_.clear();
+  l.ps_ = std::move(fresh);
+  contacts.origin.resize(l.ps_.n_owned());
+  for (Index i = 0; i < l.ps_.n_owned(); ++i) contacts.origin[i] = i;
+  contacts.pairs = ContactList();
+  contacts.walls = ContactList();
+  contacts.pairs.history_stride = contacts.walls.history_stride = stride;
+  l.x_at_build_.clear();
 
-  load_walls(first);
-  load_scalars(first, comm_.rank() == 0 ? lost : 0, comm_.rank() == 0 ? lost_mass : 0);
-  load_insertion_state(first);
+  l.walls_.load_state(first);
+  load_scalars(l, first, l.comm_.rank() == 0 ? lost : 0, l.comm_.rank() == 0 ? lost_mass : 0);
+  l.insertion_.load_state(first);
   // The saved forces are complete (ghost shares folded in): the first step uses them; the lists
   // are built for this decomposition first, restoring the histories from the carries.
-  lists_valid_ = false;
-  forces_valid_ = true;
+  l.lists_valid_ = false;
+  l.forces_valid_ = true;
 }
 
-// save_insertion_state / load_insertion_state: level/level_insert.cpp
+LevelState Level::save_state() { return LevelSerializer::save(*this); }
+void Level::load_state(const LevelState& state) { LevelSerializer::load(*this, state); }
+void Level::load_redistributed(const std::vector<LevelState>& states) {
+  LevelSerializer::load_redistributed(*this, states);
+}
+std::string Level::signature() const { return LevelSerializer::signature(*this); }
 
 }  // namespace grainscale

@@ -1,4 +1,4 @@
-#include "state/contact_history.hpp"
+#include "neighbor/contact_history.hpp"
 
 #include <algorithm>
 

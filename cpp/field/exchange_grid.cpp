@@ -1,4 +1,4 @@
-#include "coupling/exchange_grid.hpp"
+#include "field/exchange_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
