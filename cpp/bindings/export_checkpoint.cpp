@@ -38,11 +38,16 @@ void export_checkpoint(py::module_& m) {
     }
     return s;
   };
-  level.def("load_state", [to_state](Level& l, const py::dict& d) { l.load_state(to_state(d)); });
-  level.def("load_redistributed", [to_state](Level& l, const py::list& parts) {
-    std::vector<LevelState> states;
-    for (const auto& d : parts) states.push_back(to_state(py::cast<py::dict>(d)));
-    l.load_redistributed(states);
-  });
+  level.def(
+      "load_state", [to_state](Level& l, const py::dict& d) { l.load_state(to_state(d)); },
+      py::arg("state"));
+  level.def(
+      "load_redistributed",
+      [to_state](Level& l, const py::list& parts) {
+        std::vector<LevelState> states;
+        for (const auto& d : parts) states.push_back(to_state(py::cast<py::dict>(d)));
+        l.load_redistributed(states);
+      },
+      py::arg("states"));
   level.def("signature", &Level::signature);
 }

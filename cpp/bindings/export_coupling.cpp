@@ -185,10 +185,12 @@ void export_coupling(py::module_& m) {
              d["face_centre"] = rows3(centre);
              return d;
            })
-      .def("contains",
-           [](const Interface& it, std::array<Real, 3> x) {
-             return it.grid().contains(Vec3(x[0], x[1], x[2]));
-           })
+      .def(
+          "contains",
+          [](const Interface& it, std::array<Real, 3> x) {
+            return it.grid().contains(Vec3(x[0], x[1], x[2]));
+          },
+          py::arg("point"))
       .def("start_flux", &Interface::start_flux, py::arg("parent"), py::arg("margin"),
            py::call_guard<py::gil_scoped_release>())
       .def(
@@ -280,25 +282,29 @@ void export_coupling(py::module_& m) {
              for (const FluxInserter& f : it.inserters()) out.push_back(f.save_state());
              return out;
            })
-      .def("load_inserter_states",
-           [](Interface& it, const std::vector<std::string>& states) {
-             if (states.size() != it.inserters().size())
-               throw py::value_error("checkpoint holds " + std::to_string(states.size()) +
-                                     " interface inserters, this interface has " +
-                                     std::to_string(it.inserters().size()));
-             for (std::size_t k = 0; k < states.size(); ++k)
-               it.inserters()[k].load_state(states[k]);
-           })
+      .def(
+          "load_inserter_states",
+          [](Interface& it, const std::vector<std::string>& states) {
+            if (states.size() != it.inserters().size())
+              throw py::value_error("checkpoint holds " + std::to_string(states.size()) +
+                                    " interface inserters, this interface has " +
+                                    std::to_string(it.inserters().size()));
+            for (std::size_t k = 0; k < states.size(); ++k) it.inserters()[k].load_state(states[k]);
+          },
+          py::arg("states"))
       .def("sample", &Interface::sample, py::arg("level"), py::arg("child"),
            py::call_guard<py::gil_scoped_release>())
-      .def("finish_average", [](Interface& it, Level& level, bool child) {
-        CellFields f;
-        {
-          py::gil_scoped_release release;
-          f = it.finish_average(level, child);
-        }
-        return fields_dict(f);
-      });
+      .def(
+          "finish_average",
+          [](Interface& it, Level& level, bool child) {
+            CellFields f;
+            {
+              py::gil_scoped_release release;
+              f = it.finish_average(level, child);
+            }
+            return fields_dict(f);
+          },
+          py::arg("level"), py::arg("child"));
 
   auto level = py::reinterpret_borrow<py::class_<Level>>(m.attr("Level"));
   level.def(

@@ -163,27 +163,34 @@ void export_insert(py::module_& m) {
           py::arg("velocity"), py::arg("seed"), py::arg("start"), py::arg("stop"), py::arg("every"),
           py::arg("max_attempts"))
       .def("num_streams", [](Level& l) { return l.streams().size(); })
-      .def("stream_status",
-           [](Level& l, int k) {
-             const StreamInserter& s = stream_at(l, k);
-             py::dict d;
-             d["requested_mass"] = s.requested_mass(l.time());
-             d["scheduled_mass"] = s.scheduled_mass();
-             d["inserted_mass"] = s.inserted_mass();
-             d["pending_mass"] = s.pending_mass();
-             d["inserted_count"] = s.inserted_count();
-             d["pending_count"] = s.pending_count();
-             d["batches"] = s.batches();
-             d["interval"] = s.interval();
-             d["thickness"] = s.thickness();
-             const Vec3& n = s.direction();
-             d["direction"] = V3{n[0], n[1], n[2]};
-             return d;
-           })
-      .def("stream_slab", [](Level& l, int k) { return stream_at(l, k).slab(); })
-      .def("stream_get_state", [](Level& l, int k) { return stream_at(l, k).save_state(); })
-      .def("stream_set_state",
-           [](Level& l, int k, const std::string& s) { stream_at(l, k).load_state(s); })
+      .def(
+          "stream_status",
+          [](Level& l, int k) {
+            const StreamInserter& s = stream_at(l, k);
+            py::dict d;
+            d["requested_mass"] = s.requested_mass(l.time());
+            d["scheduled_mass"] = s.scheduled_mass();
+            d["inserted_mass"] = s.inserted_mass();
+            d["pending_mass"] = s.pending_mass();
+            d["inserted_count"] = s.inserted_count();
+            d["pending_count"] = s.pending_count();
+            d["batches"] = s.batches();
+            d["interval"] = s.interval();
+            d["thickness"] = s.thickness();
+            const Vec3& n = s.direction();
+            d["direction"] = V3{n[0], n[1], n[2]};
+            return d;
+          },
+          py::arg("index"))
+      .def(
+          "stream_slab", [](Level& l, int k) { return stream_at(l, k).slab(); }, py::arg("index"))
+      .def(
+          "stream_get_state", [](Level& l, int k) { return stream_at(l, k).save_state(); },
+          py::arg("index"))
+      .def(
+          "stream_set_state",
+          [](Level& l, int k, const std::string& s) { stream_at(l, k).load_state(s); },
+          py::arg("index"), py::arg("state"))
       .def(
           "add_outlet",
           [](Level& l, const Region& region, int every) {
@@ -194,26 +201,34 @@ void export_insert(py::module_& m) {
           },
           py::arg("region"), py::arg("every"))
       .def("num_outlets", [](Level& l) { return l.outlets().size(); })
-      .def("outlet_status",
-           [](Level& l, int k) {
-             const Outlet& o = outlet_at(l, k);
-             py::dict d;
-             d["removed_count"] = o.removed_count();
-             d["removed_mass"] = o.removed_mass();
-             const Vec3& m = o.removed_moment();
-             d["removed_moment"] = py::make_tuple(m[0], m[1], m[2]);
-             d["removed_face_mass"] = to_numpy(o.removed_face_mass());
-             return d;
-           })
-      .def("outlet_history",
-           [](Level& l, int k) {
-             const Outlet& o = outlet_at(l, k);
-             return py::make_tuple(to_numpy(o.history_time()), to_numpy(o.history_mass()),
-                                   to_numpy(o.history_count()));
-           })
-      .def("outlet_get_state", [](Level& l, int k) { return outlet_at(l, k).save_state(); })
-      .def("outlet_set_state",
-           [](Level& l, int k, const std::string& s) { outlet_at(l, k).load_state(s); })
+      .def(
+          "outlet_status",
+          [](Level& l, int k) {
+            const Outlet& o = outlet_at(l, k);
+            py::dict d;
+            d["removed_count"] = o.removed_count();
+            d["removed_mass"] = o.removed_mass();
+            const Vec3& m = o.removed_moment();
+            d["removed_moment"] = py::make_tuple(m[0], m[1], m[2]);
+            d["removed_face_mass"] = to_numpy(o.removed_face_mass());
+            return d;
+          },
+          py::arg("index"))
+      .def(
+          "outlet_history",
+          [](Level& l, int k) {
+            const Outlet& o = outlet_at(l, k);
+            return py::make_tuple(to_numpy(o.history_time()), to_numpy(o.history_mass()),
+                                  to_numpy(o.history_count()));
+          },
+          py::arg("index"))
+      .def(
+          "outlet_get_state", [](Level& l, int k) { return outlet_at(l, k).save_state(); },
+          py::arg("index"))
+      .def(
+          "outlet_set_state",
+          [](Level& l, int k, const std::string& s) { outlet_at(l, k).load_state(s); },
+          py::arg("index"), py::arg("state"))
       .def(
           "remove_particles",
           [](Level& l, const std::vector<GlobalId>& ids) { return l.remove_particles(ids); },

@@ -106,9 +106,11 @@ void export_level(py::module_& m) {
       .def("set_interaction", &Level::set_interaction, py::arg("i"), py::arg("j"),
            py::arg("interaction"))
       .def("set_default_interaction", &Level::set_default_interaction, py::arg("interaction"))
-      .def("set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); })
+      .def(
+          "set_gravity", [](Level& l, std::array<Real, 3> g) { l.set_gravity(to_vec3(g)); },
+          py::arg("gravity"))
       .def("set_time_step", &Level::set_time_step, py::arg("time_step"), py::arg("force"))
-      .def("set_skin", &Level::set_skin)
+      .def("set_skin", &Level::set_skin, py::arg("skin"))
       .def("set_dimension", &Level::set_dimension, py::arg("dimension"))
       .def_property_readonly("dimension", &Level::dimension)
       .def_property_readonly("plane_z", &Level::plane_z)
@@ -211,24 +213,38 @@ void export_level(py::module_& m) {
           },
           py::arg("index"), py::arg("enabled"), py::arg("direction"), py::arg("target_force"),
           py::arg("gain"), py::arg("max_speed"), py::arg("integral_gain") = 0.0)
-      .def("wall_servo_integral", [](Level& l, int i) { return l.walls().at(i).servo.integral; })
-      .def("wall_velocity", [](Level& l, int i) { return from_vec3(l.walls().at(i).velocity); })
-      .def("wall_origin", [](Level& l, int i) { return from_vec3(l.walls().at(i).origin); })
-      .def("wall_vertices",
-           [](Level& l, int i) {
-             const Wall& w = l.walls().at(i);
-             if (!w.mesh) throw py::value_error("wall " + std::to_string(i) + " is not a mesh");
-             py::array_t<Real> out(
-                 {static_cast<py::ssize_t>(w.mesh->vertices.size()), py::ssize_t(3)});
-             auto o = out.mutable_unchecked<2>();
-             for (std::size_t k = 0; k < w.mesh->vertices.size(); ++k)
-               for (int c = 0; c < 3; ++c) o(k, c) = w.mesh->vertices[k][c];
-             return out;
-           })
+      .def(
+          "wall_servo_integral", [](Level& l, int i) { return l.walls().at(i).servo.integral; },
+          py::arg("index"))
+      .def(
+          "wall_velocity", [](Level& l, int i) { return from_vec3(l.walls().at(i).velocity); },
+          py::arg("index"))
+      .def(
+          "wall_origin", [](Level& l, int i) { return from_vec3(l.walls().at(i).origin); },
+          py::arg("index"))
+      .def(
+          "wall_vertices",
+          [](Level& l, int i) {
+            const Wall& w = l.walls().at(i);
+            if (!w.mesh) throw py::value_error("wall " + std::to_string(i) + " is not a mesh");
+            py::array_t<Real> out(
+                {static_cast<py::ssize_t>(w.mesh->vertices.size()), py::ssize_t(3)});
+            auto o = out.mutable_unchecked<2>();
+            for (std::size_t k = 0; k < w.mesh->vertices.size(); ++k)
+              for (int c = 0; c < 3; ++c) o(k, c) = w.mesh->vertices[k][c];
+            return out;
+          },
+          py::arg("index"))
       .def("num_walls", [](Level& l) { return l.walls().size(); })
-      .def("wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); })
-      .def("wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); })
-      .def("wall_point", [](Level& l, int i) { return from_vec3(l.walls().at(i).point); })
+      .def(
+          "wall_force", [](Level& l, int i) { return from_vec3(l.walls().at(i).force); },
+          py::arg("index"))
+      .def(
+          "wall_torque", [](Level& l, int i) { return from_vec3(l.walls().at(i).torque); },
+          py::arg("index"))
+      .def(
+          "wall_point", [](Level& l, int i) { return from_vec3(l.walls().at(i).point); },
+          py::arg("index"))
       .def("run", &Level::run, py::arg("steps"), py::arg("stats") = true,
            py::call_guard<py::gil_scoped_release>())
       .def_property("record_contacts", &Level::record_contacts, &Level::set_record_contacts)
@@ -289,18 +305,21 @@ void export_level(py::module_& m) {
              }
              return out;
            })
-      .def("view", [](Level& l, const std::string& name) -> py::array {
-        ParticleStore& ps = l.particles();
-        const Index n = ps.n_owned();
-        if (name == "position") return view<Vec3, Real>(ps.position, n, {0, 3});
-        if (name == "velocity") return view<Vec3, Real>(ps.velocity, n, {0, 3});
-        if (name == "angular_velocity") return view<Vec3, Real>(ps.angular_velocity, n, {0, 3});
-        if (name == "force") return view<Vec3, Real>(ps.force, n, {0, 3});
-        if (name == "torque") return view<Vec3, Real>(ps.torque, n, {0, 3});
-        if (name == "radius") return view<Real, Real>(ps.radius, n, {0});
-        if (name == "mass") return view<Real, Real>(ps.mass, n, {0});
-        if (name == "id") return view<GlobalId, GlobalId>(ps.id, n, {0});
-        if (name == "material") return view<std::int32_t, std::int32_t>(ps.material, n, {0});
-        throw py::value_error("unknown particle array '" + name + "'");
-      });
+      .def(
+          "view",
+          [](Level& l, const std::string& name) -> py::array {
+            ParticleStore& ps = l.particles();
+            const Index n = ps.n_owned();
+            if (name == "position") return view<Vec3, Real>(ps.position, n, {0, 3});
+            if (name == "velocity") return view<Vec3, Real>(ps.velocity, n, {0, 3});
+            if (name == "angular_velocity") return view<Vec3, Real>(ps.angular_velocity, n, {0, 3});
+            if (name == "force") return view<Vec3, Real>(ps.force, n, {0, 3});
+            if (name == "torque") return view<Vec3, Real>(ps.torque, n, {0, 3});
+            if (name == "radius") return view<Real, Real>(ps.radius, n, {0});
+            if (name == "mass") return view<Real, Real>(ps.mass, n, {0});
+            if (name == "id") return view<GlobalId, GlobalId>(ps.id, n, {0});
+            if (name == "material") return view<std::int32_t, std::int32_t>(ps.material, n, {0});
+            throw py::value_error("unknown particle array '" + name + "'");
+          },
+          py::arg("name"));
 }
