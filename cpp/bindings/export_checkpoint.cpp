@@ -49,5 +49,11 @@ void export_checkpoint(py::module_& m) {
         l.load_redistributed(states);
       },
       py::arg("states"));
+  level.def(
+      "check_state",
+      [to_state](const Level& l, const py::dict& d, bool exact, int n_materials) {
+        l.check_state(to_state(d), exact, n_materials);
+      },
+      py::arg("state"), py::arg("exact"), py::arg("n_materials"));
   level.def("signature", &Level::signature);
 }

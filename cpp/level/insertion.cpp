@@ -146,16 +146,32 @@ void Insertion::save_state(LevelState& s) const {
     s.texts["outlet/" + std::to_string(k)] = outlets_[k].save_state();
 }
 
+namespace {
+
+const std::string& saved_text(const LevelState& s, const std::string& key) {
+  const auto it = s.texts.find(key);
+  if (it == s.texts.end()) throw std::runtime_error("checkpoint lacks the state of " + key);
+  return it->second;
+}
+
+}  // namespace
+
 void Insertion::load_state(const LevelState& s) {
-  auto text = [&](const std::string& key) -> const std::string& {
-    const auto it = s.texts.find(key);
-    if (it == s.texts.end()) throw std::runtime_error("checkpoint lacks the state of " + key);
-    return it->second;
-  };
   for (std::size_t k = 0; k < streams_.size(); ++k)
-    streams_[k].load_state(text("stream/" + std::to_string(k)));
+    streams_[k].load_state(saved_text(s, "stream/" + std::to_string(k)));
   for (std::size_t k = 0; k < outlets_.size(); ++k)
-    outlets_[k].load_state(text("outlet/" + std::to_string(k)));
+    outlets_[k].load_state(saved_text(s, "outlet/" + std::to_string(k)));
+}
+
+void Insertion::check_state(const LevelState& s) const {
+  for (std::size_t k = 0; k < streams_.size(); ++k) {
+    StreamInserter copy = streams_[k];
+    copy.load_state(saved_text(s, "stream/" + std::to_string(k)));
+  }
+  for (std::size_t k = 0; k < outlets_.size(); ++k) {
+    Outlet copy = outlets_[k];
+    copy.load_state(saved_text(s, "outlet/" + std::to_string(k)));
+  }
 }
 
 void Insertion::step(Level& level) {

@@ -59,6 +59,8 @@ class Insertion {
   // Checkpoint: the complete mutable state of every stream and outlet as text.
   void save_state(LevelState& s) const;
   void load_state(const LevelState& s);
+  // The checks of load_state on copies, changing nothing (throws on a damaged state).
+  void check_state(const LevelState& s) const;
 
  private:
   void apply_outlets(Level& level);

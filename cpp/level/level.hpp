@@ -138,6 +138,10 @@ class Level {
   LevelState save_state();
   void load_state(const LevelState& state);
   void load_redistributed(const std::vector<LevelState>& states);
+  // Every check of a load, changing nothing: throws std::runtime_error naming the damage.
+  // exact: as load_state (else as one part of load_redistributed); n_materials: the materials
+  // registered by the time of the load.
+  void check_state(const LevelState& state, bool exact, int n_materials) const;
   std::string signature() const;
 
   // --- state and diagnostics ---

@@ -52,6 +52,31 @@ void get_list(const LevelState& s, const std::string& key, ContactList& l) {
   index_rows(l);
 }
 
+// A saved contact list for `rows` owned particles: offsets from 0, non-decreasing, ending at
+// the entry count; partners in [0, partners); touching 0 or 1; `stride` history values per
+// entry.
+void check_list(const LevelState& s, const std::string& key, std::size_t rows, std::size_t partners,
+                int stride) {
+  const auto& first = ints(s, key + "/first");
+  const auto& partner = ints(s, key + "/partner");
+  const auto& touching = ints(s, key + "/touching");
+  const auto bad = [&](const std::string& what) {
+    throw std::runtime_error("checkpoint contact list '" + key + "' is damaged: " + what);
+  };
+  if (first.size() != rows + 1) bad("its offsets do not match the particle count");
+  if (first[0] != 0 || first.back() != static_cast<std::int64_t>(partner.size()))
+    bad("its offsets do not span its entries");
+  for (std::size_t k = 0; k < rows; ++k)
+    if (first[k + 1] < first[k]) bad("its offsets decrease");
+  for (auto p : partner)
+    if (p < 0 || static_cast<std::size_t>(p) >= partners) bad("a partner is out of range");
+  if (touching.size() != partner.size()) bad("touching flags and entries differ in number");
+  for (auto t : touching)
+    if (t != 0 && t != 1) bad("a touching flag is neither 0 nor 1");
+  if (reals(s, key + "/history").size() != partner.size() * static_cast<std::size_t>(stride))
+    bad("its history does not match this contact law's history size");
+}
+
 // Ghost stages: per stage axis, dir, send_to, recv_from, recv_first, recv_count, n_send, then
 // the sent indices; the shifts separately.
 void put_ghost_stages(LevelState& s, const std::vector<GhostStage>& stages) {
@@ -115,9 +140,13 @@ void put_decomposition(LevelState& s, const Decomposition& d, int ranks) {
 }  // namespace
 
 std::string LevelSerializer::signature(const Level& l) {
+  return signature(l, l.materials_.n_materials());
+}
+
+std::string LevelSerializer::signature(const Level& l, int n_materials) {
   std::ostringstream s;
-  s << "law=" << law_name(l.law_) << ";materials=" << l.materials_.n_materials()
-    << ";walls=" << l.walls_.size() << ";primitives=" << l.walls_.primitives().wall.size()
+  s << "law=" << law_name(l.law_) << ";materials=" << n_materials << ";walls=" << l.walls_.size()
+    << ";primitives=" << l.walls_.primitives().wall.size()
     << ";streams=" << l.insertion_.streams().size() << ";outlets=" << l.insertion_.outlets().size()
     << ";periodic=" << l.domain_.periodic[0] << l.domain_.periodic[1] << l.domain_.periodic[2];
   // Only the 2-D mode is named, so 3-D checkpoints written before it existed still load.
@@ -210,12 +239,13 @@ struct SavedParticles {
 
 }  // namespace
 
-void LevelSerializer::check_signature(const Level& l, const LevelState& s) {
+void LevelSerializer::check_signature(const Level& l, const LevelState& s, int n_materials) {
   auto sig = s.texts.find("signature");
   if (sig == s.texts.end()) throw std::runtime_error("checkpoint lacks its set-up signature");
-  if (sig->second != signature(l))
+  const std::string here = signature(l, n_materials);
+  if (sig->second != here)
     throw InvalidArgument("checkpoint was written for the set-up '" + sig->second +
-                          "', this simulation is '" + signature(l) + "'");
+                          "', this simulation is '" + here + "'");
   const auto& si = ints(s, "scalars");
   const auto& sr = reals(s, "scalars");
   if (si.size() != 7 || sr.size() != 6) throw std::runtime_error("checkpoint scalars are corrupt");
@@ -247,8 +277,37 @@ void LevelSerializer::load_scalars(Level& l, const LevelState& s, std::int64_t l
   l.stats_.max_overlap_ratio = sr[5];
 }
 
+void LevelSerializer::validate(const Level& l, const LevelState& s, bool exact, int n_materials) {
+  check_signature(l, s, n_materials);
+  const SavedParticles saved(s, n_materials);
+  const std::size_t no = saved.no, nl = saved.nl;
+  const std::int64_t next_id = ints(s, "scalars")[2];
+  std::vector<std::int64_t> ids(saved.id->begin(), saved.id->begin() + no);
+  std::sort(ids.begin(), ids.end());
+  if (!ids.empty() && (ids.front() < 0 || ids.back() >= next_id))
+    throw std::runtime_error("checkpoint particle ids are out of range");
+  if (std::adjacent_find(ids.begin(), ids.end()) != ids.end())
+    throw std::runtime_error("checkpoint holds two particles with one id");
+  for (std::size_t k = 0; k < nl; ++k)
+    if (!((*saved.radius)[k] > 0 && (*saved.mass)[k] > 0 && (*saved.inv_mass)[k] > 0 &&
+          std::isfinite((*saved.inv_inertia)[k]) && saved.x[k].allFinite() &&
+          saved.v[k].allFinite() && saved.w[k].allFinite()))
+      throw std::runtime_error("checkpoint particle " + std::to_string((*saved.id)[k]) +
+                               " has a non-finite or non-positive value");
+  const int stride = history_size(l.law_);
+  check_list(s, "lists/pairs", no, nl, stride);
+  check_list(s, "lists/walls", no, l.walls_.primitives().wall.size(), stride);
+  if (exact) {
+    get_ghost_stages(s, no, nl);
+    if (reals(s, "lists/x_at_build").size() != 3 * no)
+      throw std::runtime_error("checkpoint array 'lists/x_at_build' has the wrong size");
+  }
+  l.walls_.check_state(s);
+  l.insertion_.check_state(s);
+}
+
 void LevelSerializer::load(Level& l, const LevelState& s) {
-  check_signature(l, s);
+  validate(l, s, true, l.materials_.n_materials());
   const auto& dec = ints(s, "decomposition");
   const auto& cuts = reals(s, "decomposition/cuts");
   if (dec[0] != l.comm_.size() || dec[4] != l.comm_.rank())
@@ -313,7 +372,7 @@ void LevelSerializer::load(Level& l, const LevelState& s) {
 
 void LevelSerializer::load_redistributed(Level& l, const std::vector<LevelState>& states) {
   if (states.empty()) throw std::runtime_error("checkpoint holds no rank state");
-  for (const LevelState& s : states) check_signature(l, s);
+  for (const LevelState& s : states) validate(l, s, false, l.materials_.n_materials());
   const LevelState& first = states.front();
   if (static_cast<std::size_t>(ints(first, "decomposition")[0]) != states.size())
     throw std::runtime_error("checkpoint holds " + std::to_string(states.size()) +
@@ -391,5 +450,8 @@ void Level::load_redistributed(const std::vector<LevelState>& states) {
   LevelSerializer::load_redistributed(*this, states);
 }
 std::string Level::signature() const { return LevelSerializer::signature(*this); }
+void Level::check_state(const LevelState& state, bool exact, int n_materials) const {
+  LevelSerializer::validate(*this, state, exact, n_materials);
+}
 
 }  // namespace grainscale

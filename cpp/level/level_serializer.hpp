@@ -21,11 +21,18 @@ class LevelSerializer {
   static LevelState save(Level& level);
   static void load(Level& level, const LevelState& state);
   static void load_redistributed(Level& level, const std::vector<LevelState>& states);
+  // Every check a load makes, before anything changes: counts, list offsets and partners,
+  // ids, ghost stages, walls and inserter states. `exact`: the state is loaded as this rank's
+  // (ghosts and lists kept); `n_materials`: the materials the restart will have registered.
+  // Throws std::runtime_error naming what is damaged; load() and load_redistributed() call it.
+  static void validate(const Level& level, const LevelState& state, bool exact, int n_materials);
   // The set-up a state belongs to (law, counts of materials, walls, inserters; periodicity).
   static std::string signature(const Level& level);
+  // The same with `n_materials` registered (a restart registers the checkpoint's first).
+  static std::string signature(const Level& level, int n_materials);
 
  private:
-  static void check_signature(const Level& level, const LevelState& state);
+  static void check_signature(const Level& level, const LevelState& state, int n_materials);
   // Scalars shared by every rank's state; `lost` and `lost_mass` are the rank's own.
   static void load_scalars(Level& level, const LevelState& state, std::int64_t lost,
                            Real lost_mass);

@@ -162,6 +162,27 @@ void WallSet::save_state(LevelState& s) const {
   }
 }
 
+void WallSet::check_state(const LevelState& s) const {
+  const auto& shift = state_io::reals(s, "walls/shift");
+  if (shift.size() != walls_.size()) throw std::runtime_error("checkpoint wall count differs");
+  for (std::size_t k = 0; k < walls_.size(); ++k) {
+    const std::string key = "walls/" + std::to_string(k) + "/";
+    const auto finite = [&](const std::string& name, std::size_t size) {
+      const auto& a = state_io::reals(s, key + name);
+      if (a.size() != size)
+        throw std::runtime_error("checkpoint array '" + key + name + "' has the wrong size");
+      for (double x : a)
+        if (!std::isfinite(x))
+          throw std::runtime_error("checkpoint array '" + key + name +
+                                   "' holds a non-finite value");
+    };
+    finite("vectors", 33);
+    const std::size_t servo = state_io::reals(s, key + "servo").size();
+    finite("servo", servo == 4 ? 4 : 6);
+    if (walls_[k].mesh) finite("vertices", 3 * walls_[k].mesh->vertices.size());
+  }
+}
+
 void WallSet::load_state(const LevelState& s) {
   using state_io::get;
   wall_shift_ = state_io::reals(s, "walls/shift");

@@ -61,6 +61,8 @@ class WallSet {
   void save_state(LevelState& s) const;
   // The mesh bin margin is a scalar of the level's state ("scalars"), loaded with them.
   void load_state(const LevelState& s);
+  // The checks of load_state, changing nothing (throws std::runtime_error on a damaged state).
+  void check_state(const LevelState& s) const;
   Real mesh_bin_margin() const { return mesh_bin_margin_; }
   void set_mesh_bin_margin(Real margin) { mesh_bin_margin_ = margin; }
 

@@ -75,6 +75,11 @@ class Engine:
         else:
             self.core.load_redistributed(list(parts))
 
+    def check_state(self, part: dict[str, Any], exact: bool, n_materials: int) -> None:
+        """Every check a load makes on a checkpoint's rank part, changing nothing (RuntimeError
+        naming the damage)."""
+        self.core.check_state(part, exact, n_materials)
+
     def processor_grid(self) -> tuple[int, int, int]:
         """The (px, py, pz) ranks along x, y, z."""
         px, py, pz = self.core.decomposition()["grid"]

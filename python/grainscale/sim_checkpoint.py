@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import warnings
 from typing import TYPE_CHECKING, Any
 
 from . import _core
@@ -21,6 +22,8 @@ class CheckpointMethods:
     _skin_fixed: bool
     _wall_spin: dict[int, tuple[float, float, float]]
     _materials: list[Material]
+    domain: Any
+    contact: Any
 
     if TYPE_CHECKING:
 
@@ -40,8 +43,45 @@ class CheckpointMethods:
 
         checkpoint.load(self, path)
 
+    def _setup_record(self) -> dict[str, Any]:
+        """What a restart compares with the simulation it loads into (beyond the core's
+        signature): the domain, the dimension and the contact law with its parameters."""
+        d = self.domain
+        return {
+            "domain": [list(map(float, d.lo)), list(map(float, d.hi)), list(map(bool, d.periodic))],
+            "dimension": int(self._level.dimension),
+            "contact": repr(self.contact),
+        }
+
+    def _check_checkpoint_extra(self, extra: dict[str, Any]) -> None:
+        """Refuses a checkpoint written for another set-up (before anything changes); a file
+        written before the set-up was recorded is checked by the core's signature only."""
+        saved = extra.get("setup")
+        if saved is None:
+            return
+        here = self._setup_record()
+        names = {
+            "domain": "domain [lo, hi, periodic]",
+            "dimension": "dimension",
+            "contact": "contact law",
+        }
+        for key, name in names.items():
+            if saved.get(key) != here[key]:
+                raise ValueError(
+                    f"checkpoint was written for the {name} {saved.get(key)!r}, this simulation's "
+                    f"is {here[key]!r}"
+                )
+        for k, fields_ in enumerate(extra.get("materials", [])):
+            material = Material(**fields_)
+            if k < len(self._materials) and self._materials[k] != material:
+                raise ValueError(
+                    f"checkpoint material {k} is {material}, this simulation has "
+                    f"{self._materials[k]}: the set-up differs"
+                )
+
     def _checkpoint_extra(self) -> dict[str, Any]:
         return {
+            "setup": self._setup_record(),
             "time_step": self._time_step,
             "skin_fixed": self._skin_fixed,
             "wall_spin": {str(k): list(v) for k, v in self._wall_spin.items()},
@@ -61,7 +101,15 @@ class CheckpointMethods:
             self.material_index(material)
         self._push_interactions()
         if extra.get("time_step") is not None:
-            self._time_step = float(extra["time_step"])
+            saved = float(extra["time_step"])
+            if self._time_step is not None and self._time_step != saved:
+                warnings.warn(
+                    f"restart: the checkpoint's time step {saved:g} s replaces the time step "
+                    f"{self._time_step:g} s set on this simulation (set it again after the "
+                    "restart to change it)",
+                    stacklevel=4,
+                )
+            self._time_step = saved
             self._level.set_time_step(self._time_step, self._force_time_step)
         self._skin_fixed = bool(extra.get("skin_fixed", True))
         self._wall_spin = {int(k): tuple(v) for k, v in extra.get("wall_spin", {}).items()}

@@ -120,7 +120,9 @@ def test_corrupt_files_give_clear_errors(tmp_path):
     sim.checkpoint(path)
     with h5py.File(path, "a") as f:
         del f["rank_0/reals/particles/mass"]
-    with pytest.raises(RuntimeError, match="checkpoint lacks 'particles/mass'"):
+    with pytest.raises(
+        ValueError, match=r"state.h5.*datasets missing or added: reals/particles/mass"
+    ):
         build(LAWS[0]).restart(path)
 
     other = tmp_path / "other.h5"
@@ -152,3 +154,36 @@ def test_restart_with_default_skin_and_time_step(tmp_path):
 def snapshot_particles(sim: gs.Simulation) -> np.ndarray:
     with sim.particles(writable=False) as p:
         return np.concatenate([p.position.ravel(), p.velocity.ravel(), p.force.ravel()])
+
+
+def test_restart_checks_domain_law_parameters_and_says_what_wins(tmp_path):
+    """A restart into another domain, or with other parameters of the same law, is refused
+    before anything changes; a time step set on the simulation is replaced by the
+    checkpoint's, with a warning saying so."""
+    sim = populated(LAWS[0])
+    sim.run(steps=10)
+    path = tmp_path / "state.h5"
+    sim.checkpoint(path)
+
+    wider = gs.Simulation(
+        domain=gs.Box(lo=(0, 0, -0.002), hi=(0.03, 0.02, 0.04), periodic=(True, False, False)),
+        time_step=1e-5,
+        contact=LAWS[0],
+    )
+    for wall in build(LAWS[0]).walls:
+        wider.add_wall(wall.geometry, servo=wall.servo)
+    with pytest.raises(ValueError, match=r"state.h5.*domain \[lo, hi, periodic\]"):
+        wider.restart(path)
+    assert wider.num_particles == 0
+
+    stickier = gs.contact.HertzMindlin(
+        restitution=0.5, friction=0.8, rolling=gs.contact.EPSD(0.1, 0.3)
+    )
+    with pytest.raises(ValueError, match=r"contact law .*friction=0\.5.*friction=0\.8"):
+        build(stickier).restart(path)
+
+    other_step = build(LAWS[0])
+    other_step.time_step = 5e-6
+    with pytest.warns(UserWarning, match=r"time step 1e-05 s replaces the time step 5e-06 s"):
+        other_step.restart(path)
+    assert other_step.time_step == 1e-5
