@@ -11,12 +11,67 @@ from collections.abc import Sequence
 import numpy as np
 
 
+def is_real(value: object) -> bool:
+    """Whether ``value`` is a real number: int, float or a numpy integer/float scalar; not a
+    bool, a string, a complex number or an array (no silent coercion)."""
+    if isinstance(value, bool | np.bool_):
+        return False
+    if isinstance(value, int | float | np.integer | np.floating):
+        return True
+    return isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf"
+
+
+def real(owner: str, name: str, value: object, what: str = "a number") -> float:
+    """``value`` as a float if it is a real number (see is_real), else ValueError."""
+    if not is_real(value):
+        raise ValueError(f"{owner}.{name} must be {what}, got {value!r}")
+    return float(value)  # type: ignore[arg-type]
+
+
+def _holds_bool(value: object) -> bool:
+    if isinstance(value, bool | np.bool_):
+        return True
+    return isinstance(value, list | tuple) and any(_holds_bool(v) for v in value)
+
+
+def real_array(owner: str, name: str, value: object, *shapes: tuple[int | None, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous float64 array of one of ``shapes`` (None: any length),
+    refusing strings, bools, complex numbers, objects, ragged or other shapes and non-finite
+    values."""
+    try:
+        a = np.asarray(value)
+    except Exception:
+        a = np.asarray(None)
+    if a.dtype.kind not in "iuf" or _holds_bool(value):
+        kind = "bool" if _holds_bool(value) else a.dtype
+        raise ValueError(
+            f"{owner}.{name} must be an array of real numbers, got dtype {kind} ({str(value)[:60]})"
+        )
+
+    def fits(shape: tuple[int | None, ...]) -> bool:
+        return a.ndim == len(shape) and all(
+            n is None or n == m for n, m in zip(shape, a.shape, strict=True)
+        )
+
+    if not any(fits(shape) for shape in shapes):
+        want = " or ".join(
+            "("
+            + ", ".join("N" if n is None else str(n) for n in sh)
+            + ("," if len(sh) == 1 else "")
+            + ")"
+            for sh in shapes
+        )
+        raise ValueError(f"{owner}.{name} must have shape {want}, got {a.shape}")
+    a = np.ascontiguousarray(a, dtype=float)
+    if not np.all(np.isfinite(a)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+        raise ValueError(f"{owner}.{name} must be finite, got {float(a[bad])} at index {bad}")
+    return a
+
+
 def positive(owner: str, name: str, value: float, unit: str = "") -> float:
     """Return ``value`` as float if it is positive and finite, else raise ValueError."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}.{name} must be a positive number{unit}, got {value!r}") from None
+    v = real(owner, name, value, f"a positive number{unit}")
     if not (v > 0 and math.isfinite(v)):
         raise ValueError(f"{owner}.{name} must be positive and finite{unit}, got {value!r}")
     return v
@@ -26,10 +81,7 @@ def in_range(
     owner: str, name: str, value: float, lo: float, hi: float, closed_hi: bool = True
 ) -> float:
     """Return ``value`` as float if it lies in [lo, hi] (or [lo, hi)), else raise ValueError."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}.{name} must be a number, got {value!r}") from None
+    v = real(owner, name, value)
     ok = lo <= v <= hi if closed_hi else lo <= v < hi
     if not ok or math.isnan(v):
         bracket = "]" if closed_hi else ")"
@@ -39,21 +91,19 @@ def in_range(
 
 def non_negative(owner: str, name: str, value: float) -> float:
     """Return ``value`` as float if it is >= 0 and finite, else raise ValueError."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}.{name} must be a number, got {value!r}") from None
+    v = real(owner, name, value)
     if not (v >= 0 and math.isfinite(v)):
         raise ValueError(f"{owner}.{name} must be non-negative and finite, got {value!r}")
     return v
 
 
 def vector3(owner: str, name: str, value: Sequence[float]) -> tuple[float, float, float]:
-    """Return a finite 3-vector as a tuple of floats, else raise ValueError."""
+    """Return a finite 3-vector of real numbers as a tuple of floats, else raise ValueError."""
     try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}.{name} must be a 3-vector of numbers, got {value!r}") from None
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{owner}.{name} must be a finite 3-vector, got {value!r}")
+        a = np.asarray(value)
+    except Exception:
+        a = np.asarray(None)
+    bad = a.dtype.kind not in "iuf" or a.shape != (3,) or _holds_bool(value)
+    if bad or not np.all(np.isfinite(a)):
+        raise ValueError(f"{owner}.{name} must be a finite 3-vector of numbers, got {value!r}")
     return (float(a[0]), float(a[1]), float(a[2]))

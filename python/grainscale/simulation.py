@@ -17,7 +17,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from . import _core, parallel
-from ._validate import positive, vector3
+from ._validate import positive, real_array, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .engine import Engine
 from .geometry import Box, Servo
@@ -241,27 +241,17 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             velocity: (N, 3) or (3,) m/s, default zero.
             angular_velocity: (N, 3) or (3,) rad/s, default zero.
         """
-        pos = np.ascontiguousarray(np.asarray(position, dtype=float).reshape(-1, 3))
+        owner = "Simulation.add_particles"
+        pos = real_array(owner, "position", position, (None, 3), (3,)).reshape(-1, 3)
         n = pos.shape[0]
-        rad = np.asarray(radius, dtype=float)
-        if rad.shape not in ((), (n,)):
-            raise ValueError(
-                f"Simulation.add_particles.radius must have shape () or ({n},), got {rad.shape}"
-            )
+        rad = real_array(owner, "radius", radius, (), (n,))
         rad = np.ascontiguousarray(np.broadcast_to(rad, (n,)))
-        mat = np.full(
-            n, self.particle_material_index(material, "Simulation.add_particles"), dtype=np.int32
-        )
+        mat = np.full(n, self.particle_material_index(material, owner), dtype=np.int32)
 
         def rows(a: Any, name: str) -> np.ndarray | None:
             if a is None:
                 return None
-            arr = np.asarray(a, dtype=float)
-            if arr.shape not in ((3,), (n, 3)):
-                raise ValueError(
-                    f"Simulation.add_particles.{name} must have shape (3,) or ({n}, 3), "
-                    f"got {arr.shape}"
-                )
+            arr = real_array(owner, name, a, (3,), (n, 3))
             return np.ascontiguousarray(np.broadcast_to(arr, (n, 3)))
 
         first = self._level.add_particles(
