@@ -61,7 +61,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from . import _core, scaling
+from . import _core, parallel, scaling
 from ._validate import positive
 from .coupling import Coupling, StressBoundary, rest_speed
 from .dist import Distribution
@@ -419,6 +419,8 @@ class Hierarchy:
                 f"Hierarchy.run needs exactly one of until or intervals, got until={until!r}, "
                 f"intervals={intervals!r}"
             )
+        comm = self.sims[0].comm
+        parallel.same_arguments(comm, "Hierarchy.run", until=until, intervals=intervals)
         if intervals is None:
             u = float(until)  # type: ignore[arg-type]
             if not math.isfinite(u):

@@ -20,6 +20,8 @@ import os
 import sys
 from typing import Any
 
+import numpy as np
+
 from . import _core
 
 # Launchers' environment variables that give the number of ranks (Open MPI, MPICH/Hydra, PMIx).
@@ -90,3 +92,30 @@ def agree(comm: Any, error: BaseException | None) -> None:
     except Exception:  # an exception type with other constructor arguments
         same = None
     raise same if same is not None else RuntimeError(f"{name}: {text}")
+
+
+def same_arguments(comm: Any, call: str, **arguments: Any) -> None:
+    """Collective: the arguments of a collective ``call`` compared over the ranks before it
+    starts, so that ranks that disagree raise the same ValueError instead of waiting for each
+    other forever. Arrays are compared by content (a digest of their bytes)."""
+    if comm is None:
+        return
+    import hashlib
+
+    def fingerprint(value: Any) -> str:
+        if isinstance(value, np.ndarray):
+            a = np.ascontiguousarray(value)
+            return f"array{a.shape}:" + hashlib.sha256(a.tobytes()).hexdigest()[:16]
+        text = repr(value)
+        return text if len(text) <= 80 else hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    mine = {k: fingerprint(v) for k, v in arguments.items()}
+    every = comm.allgather(mine)
+    differ = sorted(k for k in mine if len({str(e.get(k)) for e in every}) > 1)
+    if differ:
+        values = "; ".join(
+            f"rank {r}: " + ", ".join(f"{k}={e[k]}" for k in differ) for r, e in enumerate(every)
+        )
+        raise ValueError(
+            f"{call} is collective: every rank must pass the same {', '.join(differ)}, got {values}"
+        )

@@ -9,7 +9,7 @@ import os
 import warnings
 from typing import TYPE_CHECKING, Any
 
-from . import _core
+from . import _core, parallel
 from .materials import Material
 
 
@@ -22,6 +22,7 @@ class CheckpointMethods:
     _skin_fixed: bool
     _wall_spin: dict[int, tuple[float, float, float]]
     _materials: list[Material]
+    comm: Any
     domain: Any
     contact: Any
 
@@ -35,12 +36,14 @@ class CheckpointMethods:
         """Save the state to an HDF5 checkpoint (see grainscale.io.checkpoint)."""
         from .io import checkpoint
 
+        parallel.same_arguments(self.comm, "Simulation.checkpoint", path=os.fspath(path))
         checkpoint.save(self, path)
 
     def restart(self, path: str | os.PathLike[str]) -> None:
         """Continue from a checkpoint written by a simulation with the same set-up."""
         from .io import checkpoint
 
+        parallel.same_arguments(self.comm, "Simulation.restart", path=os.fspath(path))
         checkpoint.load(self, path)
 
     def _setup_record(self) -> dict[str, Any]:

@@ -472,6 +472,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 f"Simulation.run needs exactly one of steps or until, got steps={steps!r}, "
                 f"until={until!r}"
             )
+        parallel.same_arguments(self._comm, "Simulation.run", steps=steps, until=until)
         self._resolve_defaults()
         dt = float(self._time_step)  # type: ignore[arg-type]
         target = self._target_step(steps, until, dt)

@@ -59,3 +59,21 @@ def max_op():
     from mpi4py import MPI
 
     return MPI.MAX
+
+
+def test_mismatched_collective_arguments_raise_the_same_error_on_every_rank(world, tmp_path):
+    """Ranks that call run() (or checkpoint()) with different arguments would wait for each
+    other forever; the arguments are compared first and every rank raises the same error."""
+    sim = settle(world, 500)
+    started = time.perf_counter()
+    with pytest.raises(ValueError, match=r"Simulation.run is collective: .*same steps, got rank 0"):
+        sim.run(steps=10 + sim.rank)
+    with pytest.raises(ValueError, match=r"Simulation.run is collective: .*until"):
+        sim.run(until=1e-4 * (1 + sim.rank))
+    path = world.bcast(str(tmp_path), root=0)
+    with pytest.raises(ValueError, match="Simulation.checkpoint is collective: .*path"):
+        sim.checkpoint(f"{path}/state_{sim.rank}.h5")
+    sim.run(steps=10)  # agreeing ranks still run
+    assert sim.step == 10
+    elapsed = world.allreduce(time.perf_counter() - started, op=max_op())
+    assert elapsed < 30.0
