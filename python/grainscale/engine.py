@@ -15,13 +15,27 @@ from collections.abc import Sequence
 from typing import Any
 
 from . import _core
+from .particle_view import WriteWatch
 
 
 class Engine:
     """The package-internal interface to one simulation's compiled level."""
 
-    def __init__(self, level: _core.Level) -> None:
+    def __init__(self, level: _core.Level, comm: Any = None) -> None:
         self.core = level
+        self.comm = comm
+        self._watch = WriteWatch()
+
+    # ----------------------------------------------------------- writes after a block
+    def arm_write_watch(self) -> None:
+        """At the end of a writable ``with sim.particles()`` block (see WriteWatch)."""
+        self._watch.arm(self.core)
+
+    def check_unseen_writes(self) -> None:
+        """Collective, before anything that touches the particle arrays (a run, a block, an
+        insertion, a removal, a checkpoint, a hierarchy's exchange): RuntimeError on every rank
+        if they were written after their block ended (see WriteWatch)."""
+        self._watch.check(self.core, self.comm)
 
     # ------------------------------------------------------------ insertion and outlets
     def pack(

@@ -434,6 +434,8 @@ class Hierarchy:
             self._interval()
 
     def _interval(self) -> None:
+        for sim in self.sims:  # before the exchange touches any level's particles
+            sim.engine.check_unseen_writes()
         for k, sim in enumerate(self.sims):
             level = sim.engine.core
             children = [c for c in self.couplings if c.parent == k]

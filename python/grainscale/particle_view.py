@@ -3,9 +3,12 @@
 
 from __future__ import annotations
 
+import hashlib
+from typing import Any
+
 import numpy as np
 
-from . import _core
+from . import _core, parallel
 
 VECTOR_FIELDS = ("position", "velocity", "angular_velocity", "force", "torque")
 SCALAR_FIELDS = ("radius", "mass", "id", "material")
@@ -42,6 +45,8 @@ class ParticleView:
 
     def _close(self) -> None:
         self._valid = False
+        for a in self._arrays.values():  # the arrays handed out cannot be written any more
+            a.flags.writeable = False
         self._arrays.clear()
 
     def __len__(self) -> int:
@@ -56,3 +61,43 @@ class ParticleView:
     mass = property(lambda self: self._get("mass"))
     id = property(lambda self: self._get("id"))
     material = property(lambda self: self._get("material"))
+
+
+class WriteWatch:
+    """Catches writes to the particle arrays after their ``with sim.particles()`` block ended
+    (through a slice or copy-free view the block handed out): the engine would not see them.
+    Armed at the end of a writable block with digests of the writable fields, checked before the
+    engine next touches the particles (run, particles, checkpoint); a difference raises a
+    RuntimeError on every rank, after telling the engine of the change."""
+
+    def __init__(self) -> None:
+        self._digests: dict[str, str] | None = None
+
+    @staticmethod
+    def _digest(level: _core.Level) -> dict[str, str]:
+        return {
+            f: hashlib.blake2b(np.ascontiguousarray(level.view(f)).tobytes()).hexdigest()
+            for f in WRITABLE_FIELDS
+        }
+
+    def arm(self, level: _core.Level) -> None:
+        self._digests = self._digest(level)
+
+    def check(self, level: _core.Level, comm: Any) -> None:
+        if self._digests is None:
+            return
+        before, self._digests = self._digests, None
+        now = self._digest(level)
+        changed = [f for f in WRITABLE_FIELDS if now[f] != before[f]]
+        error = None
+        if changed:
+            if "position" in changed:
+                level.mark_positions_changed()
+            else:
+                level.mark_velocities_changed()
+            error = RuntimeError(
+                f"particle array(s) {', '.join(changed)} were written after their 'with "
+                "sim.particles()' block ended; the engine has now taken the change, but write "
+                "inside the block (arrays from it are valid only there)"
+            )
+        parallel.agree(comm, error)

@@ -23,6 +23,7 @@ class CheckpointMethods:
     _wall_spin: dict[int, tuple[float, float, float]]
     _materials: list[Material]
     comm: Any
+    engine: Any
     domain: Any
     contact: Any
 
@@ -37,6 +38,7 @@ class CheckpointMethods:
         from .io import checkpoint
 
         parallel.same_arguments(self.comm, "Simulation.checkpoint", path=os.fspath(path))
+        self.engine.check_unseen_writes()
         checkpoint.save(self, path)
 
     def restart(self, path: str | os.PathLike[str]) -> None:
@@ -44,6 +46,7 @@ class CheckpointMethods:
         from .io import checkpoint
 
         parallel.same_arguments(self.comm, "Simulation.restart", path=os.fspath(path))
+        self.engine.check_unseen_writes()
         checkpoint.load(self, path)
 
     def _setup_record(self) -> dict[str, Any]:

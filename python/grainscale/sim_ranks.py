@@ -22,6 +22,7 @@ class RankMethods:
 
     _level: _core.Level
     _comm: Any
+    engine: Any
 
     if TYPE_CHECKING:
 
@@ -84,6 +85,7 @@ class RankMethods:
 
         Returns: ``{"before": ..., "after": ...}``, the imbalance (largest rank's work / mean).
         """
+        self.engine.check_unseen_writes()
         if every is not None:
             if isinstance(every, bool) or int(every) != every or every < 0:
                 raise ValueError(

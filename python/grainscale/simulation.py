@@ -103,7 +103,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         self._level.set_dimension(int(dimension))
         # the package's modules (insertion, checkpoints, fields, hierarchies) use this, never
         # _level (package-internal; grainscale/engine.py)
-        self.engine = Engine(self._level)
+        self.engine = Engine(self._level, self._comm)
         if processor_grid is not None:
             grid = tuple(processor_grid)
             if len(grid) != 3 or not all(isinstance(g, int) and g >= 1 for g in grid):
@@ -241,6 +241,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             velocity: (N, 3) or (3,) m/s, default zero.
             angular_velocity: (N, 3) or (3,) rad/s, default zero.
         """
+        self.engine.check_unseen_writes()
         owner = "Simulation.add_particles"
         pos = real_array(owner, "position", position, (None, 3), (3,)).reshape(-1, 3)
         n = pos.shape[0]
@@ -274,6 +275,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         ``Stream``: registers the stream, which inserts inside run(), and returns its
         :class:`~grainscale.insert.StreamHandle` (requested / inserted / pending mass, counts).
         """
+        self.engine.check_unseen_writes()
         if isinstance(operation, Pack):
             return operation._insert(self)
         if isinstance(operation, Stream):
@@ -308,6 +310,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
     def remove_particles(self, ids: np.ndarray | Sequence[int]) -> int:
         """Delete the particles with these global ids (contact histories of the others are kept);
         ids not present are ignored. Returns the number deleted."""
+        self.engine.check_unseen_writes()
         a = np.asarray(ids, dtype=np.int64).reshape(-1)
         return int(self._level.remove_particles(a.tolist()))
 
@@ -344,6 +347,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         Changes to position, velocity or angular_velocity are detected on exit: the core then
         rebuilds its lists / re-evaluates forces before the next step.
         """
+        self.engine.check_unseen_writes()
         view = ParticleView(self._level, writable)
         before = None
         if writable:
@@ -362,6 +366,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                     )
                 ):
                     self._level.mark_velocities_changed()
+            if writable:
+                self.engine.arm_write_watch()
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy (J)."""
@@ -395,6 +401,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
 
     def neighbor_pairs(self) -> np.ndarray:
         """(M, 2) global ids of the pairs in this rank's current Verlet list, each pair once."""
+        self.engine.check_unseen_writes()
         return np.asarray(self._level.neighbor_pairs())
 
     def thermo(self) -> dict[str, float]:
@@ -473,6 +480,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 f"until={until!r}"
             )
         parallel.same_arguments(self._comm, "Simulation.run", steps=steps, until=until)
+        self.engine.check_unseen_writes()
         self._resolve_defaults()
         dt = float(self._time_step)  # type: ignore[arg-type]
         target = self._target_step(steps, until, dt)
