@@ -15,9 +15,10 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from . import _core
+from . import _core, parallel
 from ._validate import vector3
 from .geometry import Cylinder, Mesh, Plane, Rectangle, Servo
+from .placement import check_particles
 
 if TYPE_CHECKING:
     from .materials import Material
@@ -161,22 +162,34 @@ class WallMethods:
     _wall_spin: dict[int, tuple[float, float, float]]
     _wall_servos: dict[int, Servo]
 
+    domain: Any
+    comm: Any
+
     if TYPE_CHECKING:
 
         def material_index(self, material: Material) -> int: ...
+
+        def particles(self, writable: bool = True) -> Any: ...
 
     @property
     def walls(self) -> list[WallHandle]:
         """The walls, in the order they were added."""
         return list(self._walls)
 
-    def add_wall(self, wall: WallGeometry, servo: Servo | None = None) -> WallHandle:
+    def add_wall(
+        self, wall: WallGeometry, servo: Servo | None = None, check_placement: bool = True
+    ) -> WallHandle:
         """Add a wall; returns its handle (force, torque, position, motion, servo).
 
         Args:
             wall: Plane, Rectangle, Cylinder or Mesh.
             servo: optional force/stress control of the wall's translation.
+            check_placement: refuse a plane, rectangle or cylinder wall that the particles
+                present overlap by more than 10 % of their radius or lie behind
+                (grainscale.placement); False accepts it.
         """
+        if check_placement and isinstance(wall, Plane | Rectangle | Cylinder):
+            self._check_new_wall(wall)
         mat = -1 if wall.material is None else self.material_index(wall.material)
         lv = self._level
         if servo is not None:  # validate before the wall exists
@@ -208,6 +221,25 @@ class WallMethods:
         if servo is not None:
             handle.servo = servo
         return handle
+
+    def _check_new_wall(self, wall: Plane | Rectangle | Cylinder) -> None:
+        """Collective: ValueError on every rank if particles present overlap the new wall."""
+        reference = wall.corner if isinstance(wall, Rectangle) else wall.point
+        error = None
+        with self.particles(writable=False) as p:
+            try:
+                check_particles(
+                    "Simulation.add_wall",
+                    self.domain,
+                    np.array(p.position),
+                    np.array(p.radius),
+                    [(wall, reference)],
+                    labels=np.array(p.id),
+                    axes=3,
+                )
+            except ValueError as err:
+                error = err
+        parallel.agree(self.comm, error)
 
     def mesh_walls(self) -> list[dict[str, Any]]:
         """Current geometry of the mesh walls: index, vertices, triangles, moving (for output)."""

@@ -24,6 +24,7 @@ from .geometry import Box, Servo
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
+from .placement import check_particles
 from .sim_checkpoint import CheckpointMethods
 from .sim_ranks import RankMethods
 from .sim_walls import WallHandle, WallMethods
@@ -230,6 +231,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         material: Material,
         velocity: np.ndarray | Sequence[float] | None = None,
         angular_velocity: np.ndarray | Sequence[float] | None = None,
+        check_placement: bool = True,
     ) -> np.ndarray:
         """Add spheres (discs in 2-D); returns their global ids (int64, never reused).
 
@@ -240,6 +242,10 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             material: their material.
             velocity: (N, 3) or (3,) m/s, default zero.
             angular_velocity: (N, 3) or (3,) rad/s, default zero.
+            check_placement: refuse particles larger than the box, with coordinates float64
+                cannot resolve, or overlapping a plane, rectangle or cylinder wall by more
+                than 10 % of their radius or behind it (grainscale.placement); False accepts
+                them.
         """
         self.engine.check_unseen_writes()
         owner = "Simulation.add_particles"
@@ -247,6 +253,11 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         n = pos.shape[0]
         rad = real_array(owner, "radius", radius, (), (n,))
         rad = np.ascontiguousarray(np.broadcast_to(rad, (n,)))
+        if np.any(rad <= 0):
+            i = int(np.argmax(rad <= 0))
+            raise ValueError(f"{owner}.radius must be positive (m), got {rad[i]} at index {i}")
+        if check_placement:
+            check_particles(owner, self.domain, pos, rad, self._walls, axes=self.dimension)
         mat = np.full(n, self.particle_material_index(material, owner), dtype=np.int32)
 
         def rows(a: Any, name: str) -> np.ndarray | None:
