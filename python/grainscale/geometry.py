@@ -252,8 +252,24 @@ class Mesh:
         """
         from stl import mesh as stl_mesh
 
-        data = stl_mesh.Mesh.from_file(os.fspath(path))
-        corners = np.asarray(data.vectors, dtype=float).reshape(-1, 3) * float(scale)
+        scale = positive("Mesh.from_stl", "scale", scale)
+        try:
+            data = stl_mesh.Mesh.from_file(os.fspath(path))
+        except FileNotFoundError:
+            raise ValueError(
+                f"Mesh.from_stl.path must be an existing STL file, got {path!r}"
+            ) from None
+        except Exception as err:  # numpy-stl reports damage in its own words and types
+            raise ValueError(
+                f"Mesh.from_stl.path must be a readable ASCII or binary STL file, got {path!r} "
+                f"({type(err).__name__}: {err})"
+            ) from None
+        corners = np.asarray(data.vectors, dtype=float).reshape(-1, 3) * scale
+        if len(corners) == 0 or not np.all(np.isfinite(corners)):
+            raise ValueError(
+                f"Mesh.from_stl.path must hold triangles with finite coordinates, got {path!r} "
+                f"({len(corners) // 3} triangles)"
+            )
         vertices, inverse = np.unique(corners, axis=0, return_inverse=True)
         triangles = inverse.reshape(-1, 3)
         # drop degenerate triangles (repeated vertices)

@@ -93,3 +93,21 @@ def test_numpy_scalars_and_integers_are_real_numbers() -> None:
         position=np.array(GOOD, dtype=np.float32), radius=np.float64(1e-3), material=m
     )
     assert list(ids) == [0]
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "must be a readable ASCII or binary STL file"),
+        (b"hello world, not an stl" * 3, "triangles with finite coordinates"),
+        (np.random.default_rng(1).bytes(5000), "must be a readable ASCII or binary STL file"),
+    ],
+)
+def test_damaged_stl_files_are_refused_naming_the_file(tmp_path, content, message) -> None:
+    path = tmp_path / "damaged.stl"
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match=r"^Mesh.from_stl.path must ") as err:
+        gs.geometry.Mesh.from_stl(path)
+    assert message in str(err.value) and "damaged.stl" in str(err.value)
+    with pytest.raises(ValueError, match="Mesh.from_stl.path must be an existing STL file"):
+        gs.geometry.Mesh.from_stl(tmp_path / "missing.stl")
