@@ -21,6 +21,7 @@ from ._validate import positive, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .engine import Engine
 from .geometry import Box, Servo
+from .guards import GuardMethods, Guards
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
@@ -37,7 +38,7 @@ class Output(Protocol):
     def write(self, sim: Simulation) -> Any: ...
 
 
-class Simulation(WallMethods, RankMethods, CheckpointMethods):
+class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods):
     """A DEM simulation of spheres in a box, with walls and one contact law.
 
     Args:
@@ -66,6 +67,11 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             same arguments; each owns the particles of its subdomain.
         processor_grid: (px, py, pz) ranks along x, y, z (px py pz = ranks); None chooses the
             grid with the smallest subdomain surface for the box's shape.
+        guards: per-step checks that stop a run (:class:`~grainscale.guards.Guards`: step
+            displacement and overlap as fractions of the radius, emergency checkpoint); None
+            means ``Guards()``, False switches them off.
+        lost_particles: ``"warn"`` (default), ``"error"`` or ``"ignore"``: the report of
+            particles removed through a closed side, once per run chunk (grainscale.guards).
 
     Example:
         >>> import grainscale as gs
@@ -91,6 +97,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         dimension: int = 3,
         comm: Any = None,
         processor_grid: Sequence[int] | None = None,
+        guards: Guards | bool | None = None,
+        lost_particles: str = "warn",
     ) -> None:
         if not isinstance(domain, Box):
             raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
@@ -101,6 +109,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         handle = None if self._comm is None else int(self._comm.py2f())
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic, handle)
         self._level.set_dimension(int(dimension))
+        self._init_guards(guards, lost_particles)
         # the package's modules (insertion, checkpoints, fields, hierarchies) use this, never
         # _level (package-internal; grainscale/engine.py)
         self.engine = Engine(self._level)
@@ -507,7 +516,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 # ranks): only where they are read (the end of the run, a thermo line, an output).
                 stats = n == stop - self.step
                 t0 = _time.perf_counter()
-                self._level.run(n, stats)
+                self._run_chunk(n, stats)
                 self._adapt_chunk(n, _time.perf_counter() - t0)
                 if bar is not None:
                     bar.update(n)
