@@ -588,11 +588,11 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods):
             if not self._header_printed:
                 write(
                     f"{'step':>10} {'time':>11} {'kinetic_energy':>15} {'contacts':>9} "
-                    f"{'max_overlap/r':>13} {'particle_steps/s':>16}"
+                    f"{'max_overlap/r':>13} {'particle_steps/s':>16} {'lost':>6}"
                 )
                 self._header_printed = True
             write(
                 f"{entry['step']:>10d} {entry['time']:>11.5g} {entry['kinetic_energy']:>15.6g} "
                 f"{entry['contacts']:>9d} {entry['max_overlap_ratio']:>13.4g} "
-                f"{entry['particle_steps_per_second']:>16.4g}"
+                f"{entry['particle_steps_per_second']:>16.4g} {entry['lost']:>6d}"
             )
