@@ -44,8 +44,9 @@ class Guards:
 
     Args:
         max_step_displacement: largest move of a particle in one step, as a fraction of its
-            radius (dimensionless, > 0; default 0.5: LIGGGHTS' check_timestep/gran warns at a
-            similar fraction). The move in one step is ``time_step x |v|`` (m).
+            radius (dimensionless, > 0; default 0.5; cf. LIGGGHTS' check/timestep/gran, which
+            compares the distance travelled per step with the radius). The move in one step is
+            ``time_step x |v|`` (m).
         max_overlap: largest contact overlap, as a fraction of the smaller radius of the pair
             (of the particle's radius for a wall; dimensionless, > 0; default 0.5).
         enabled: False switches every check off (the lost-particle policy is separate).
