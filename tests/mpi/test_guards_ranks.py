@@ -42,7 +42,9 @@ def test_displacement_guard_stops_every_rank_at_one_step(world):
     assert world.allgather(text) == [text] * world.size
     assert world.allgather(sim.step) == [11] * world.size
     assert elapsed < 5.0
-    sim.guards = False  # the ranks are still in step
+    # The ranks are still in step (the particle has hit its neighbour: no more guards).
+    sim.guards = False
+    sim.lost_particles_policy = "ignore"
     sim.run(steps=2)
 
 
@@ -61,3 +63,15 @@ def test_emergency_checkpoint_under_mpi(world, shared_tmp):
     assert again.num_particles == sim.num_particles
     n = world.allreduce(again.num_local_particles)
     assert n == 500 and np.isfinite(again.kinetic_energy())
+
+
+def test_lost_particles_are_reported_with_every_rank_s_ids(world):
+    box = gs.Box(lo=(0, 0, 0), hi=(0.04, 0.04, 0.02))
+    sim = gs.Simulation(domain=box, time_step=1e-5, comm=world, quiet=True, lost_particles="error")
+    x = np.array([[0.005 + 0.01 * k, 0.005 + 0.01 * k, 0.0015] for k in range(4)])
+    sim.add_particles(position=x, radius=1e-3, material=gs.Material(2500, 5e7, 0.3))
+    with pytest.raises(RuntimeError) as err:
+        sim.run(until=0.03)  # no floor: all four fall out
+    text = str(err.value)
+    assert "4 particle(s) left the domain" in text and "global ids 0, 1, 2, 3;" in text
+    assert world.allgather(text) == [text] * world.size
