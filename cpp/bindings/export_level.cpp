@@ -2,6 +2,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <optional>
 
 #include "bindings/mesh_arrays.hpp"
@@ -258,6 +259,25 @@ void export_level(py::module_& m) {
       .def_property_readonly("num_ghosts", [](Level& l) { return l.particles().n_ghost(); })
       .def_property_readonly("lost_particles", &Level::lost_particles)
       .def_property_readonly("lost_mass", &Level::lost_mass)
+      .def_property_readonly("lost_log_size",
+                             [](Level& l) { return static_cast<py::ssize_t>(l.lost_log().size()); })
+      .def(
+          "lost_log",
+          [](Level& l, py::ssize_t start) {
+            const auto& log = l.lost_log();
+            const auto from =
+                std::min(static_cast<std::size_t>(std::max<py::ssize_t>(start, 0)), log.size());
+            return py::array_t<GlobalId>(static_cast<py::ssize_t>(log.size() - from),
+                                         log.data() + from);
+          },
+          py::arg("start") = 0)
+      .def(
+          "set_guards",
+          [](Level& l, bool enabled, Real max_step_displacement, Real max_overlap) {
+            l.set_guards({enabled, max_step_displacement, max_overlap});
+          },
+          py::arg("enabled"), py::arg("max_step_displacement"), py::arg("max_overlap"))
+      .def_property_readonly("guard_tripped", &Level::guard_tripped)
       .def_property_readonly("rebuilds", &Level::rebuilds)
       .def_property_readonly("rebuild_seconds", &Level::rebuild_seconds)
       .def_property_readonly("halo_seconds", &Level::halo_seconds)

@@ -29,6 +29,7 @@
 #include "geometry/wall.hpp"
 #include "level/contact_state.hpp"
 #include "level/force_hook.hpp"
+#include "level/guards.hpp"
 #include "level/insertion.hpp"
 #include "level/level_state.hpp"
 #include "level/partition.hpp"
@@ -127,6 +128,17 @@ class Level {
   void mark_positions_changed();
   void mark_velocities_changed() { forces_valid_ = false; }
 
+  // --- guards (level/guards.hpp, guards.cpp) ---
+  // Collective when set. Off by default; every run() then stops (std::runtime_error on every
+  // rank) at the end of a step in which a particle moved more than max_step_displacement x its
+  // radius, at once on a non-finite position or velocity, and after its last step if a contact
+  // overlaps more than max_overlap x the smaller radius. They only read: a run they do not stop
+  // is bit-identical to one without them.
+  void set_guards(const GuardLimits& limits);
+  const GuardLimits& guards() const { return guards_; }
+  // Whether a guard stopped the last run() (reset when the next one starts).
+  bool guard_tripped() const { return guard_tripped_; }
+
   // --- checkpoint (level/level_serializer.cpp) ---
   // Everything needed to continue bit-identically; load_state needs the same set-up
   // (materials, law, walls, inserters), checked through signature().
@@ -207,8 +219,19 @@ class Level {
  private:
   friend class LevelSerializer;
 
+  // Returns true if a step guard stopped the run early (after finishing that step).
   template <bool kPlanar, class Law>
-  void run_with(const Law& law, std::int64_t steps, bool stats);
+  bool run_with(const Law& law, std::int64_t steps, bool stats);
+  // Guards (guards.cpp): the smallest radius and speed bound at the start of a run; the rare
+  // path that finds this rank's offender; the collective agreement, stopping at once for
+  // non-finite values; the overlap check after a run; the collective throw with the remedy.
+  void start_guards();
+  void update_guard_limit();
+  bool step_guard_hit();
+  bool agree_step_guard(bool hit);
+  std::string step_fallback() const;
+  void check_overlap_guard();
+  [[noreturn]] void raise_guard(const std::string& message, const std::string& fallback);
   // kOwnedReset: the owned forces already hold m g and the torques zero (set by kick_drift).
   template <class Law, bool kUpdate, bool kStats, bool kOwnedReset>
   // defer_reverse: leaves the ghost forces travelling (GhostExchange::reverse_begin); the next
@@ -258,6 +281,12 @@ class Level {
   std::vector<Index> scratch_order_, scratch_index_;
   std::vector<GlobalId> scratch_keys_;
   ContactStats stats_;
+  GuardLimits guards_;
+  Real guard_r_min_ = INFINITY;   // smallest radius over the ranks (m), at the run's start / build
+  Real guard_speed2_ = INFINITY;  // (max_step_displacement x guard_r_min_ / dt)^2
+  std::string guard_message_;     // this rank's offender, if any
+  bool guard_fatal_ = false;      // guard_message_ is about a non-finite value
+  bool guard_tripped_ = false;
 
   GlobalId next_id_ = 0;
   std::int64_t step_ = 0;

@@ -113,6 +113,8 @@ void Level::rebuild() {
   }
   r_max = comm_.max(r_max);
   r_min = comm_.min(r_min);
+  guard_r_min_ = r_min;  // particles inserted in a run bring their radii
+  update_guard_limit();
   const Real cutoff = 2 * r_max + skin_;
   const Real size_ratio = r_max / r_min;
   if (comm_.parallel()) partition_.redistribute(step_, cutoff, ps_, contacts_, domain_, comm_);
@@ -196,7 +198,7 @@ void Level::compute_forces(const Law& law, bool defer_reverse) {
 }
 
 template <bool kPlanar, class Law>
-void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
+bool Level::run_with(const Law& law, std::int64_t steps, bool stats) {
   // Ranks agree first: one rank's particles changed from Python means every rank rebuilds.
   // A set-up evaluation with valid lists first refreshes the ghosts: their velocities are those
   // of the last force evaluation, not of the closing kick or of changes made from Python.
@@ -207,6 +209,7 @@ void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
   if (comm_.any(!forces_valid_)) compute_forces<Law, false, true, false>(law);
   forces_valid_ = true;
   const Real half_skin = 0.5 * skin_;
+  bool stopped = false;
   for (std::int64_t s = 0; s < steps; ++s) {
     // The previous step's closing half kick is fused into this pass (velocity_verlet.hpp),
     // which also resets the owned forces to m g.
@@ -231,16 +234,23 @@ void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
     apply_insertions_and_outlets();  // may add/remove particles: lists become invalid
     // Inserted particles start with zero force: then the owned forces are set again.
     const bool owned_reset = lists_valid_;
-    // One reduction decides for all ranks (a rank that inserted or removed particles counts as
-    // having moved infinitely far; NaN becomes infinity too). The list is rebuilt when a
-    // particle has moved more than half the skin since the last build: the drift speeds bound
-    // the displacements, and only when the bound reaches half the skin are they measured (the
-    // same decisions as measuring every step, without reading the build positions each step).
+    // Step guard (guards.hpp): one compare of the drift's largest speed with the bound from the
+    // smallest radius (NaN fails it); only then are the particles scanned for the offender.
+    const bool guard_hit = guards_.enabled && !(max_v2 <= guard_speed2_) && step_guard_hit();
+    // One reduction decides for all ranks (a rank that inserted or removed particles, or whose
+    // guard tripped, counts as having moved infinitely far; NaN becomes infinity too). The list
+    // is rebuilt when a particle has moved more than half the skin since the last build: the
+    // drift speeds bound the displacements, and only when the bound reaches half the skin are
+    // they measured (the same decisions as measuring every step, without reading the build
+    // positions each step).
     Real speed2_all;
     {
       const ScopedTimer timer(halo_seconds_);
-      speed2_all = comm_.max(lists_valid_ ? max_v2 : INFINITY);
+      speed2_all = comm_.max(lists_valid_ && !guard_hit ? max_v2 : INFINITY);
     }
+    // Rare (insertions, removals, a guard): do the ranks agree on a guard? Stops at once for a
+    // non-finite value, else after this step.
+    const bool stop = guards_.enabled && !(speed2_all < INFINITY) && agree_step_guard(guard_hit);
     drift_bound_ += dt_ * std::sqrt(speed2_all);
     bool stale = !(drift_bound_ + wall_shift <= half_skin);
     if (stale && std::isfinite(speed2_all)) {
@@ -260,13 +270,18 @@ void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
       ghosts().forward(ps_, comm_);
     }
     // Only a step followed by another in this run leaves its ghost forces travelling.
-    const bool last = s + 1 == steps;
+    const bool last = s + 1 == steps || stop;
     if (last && stats)
       compute_forces<Law, true, true, false>(law);
     else if (owned_reset)
       compute_forces<Law, true, false, true>(law, !last);
     else
       compute_forces<Law, true, false, false>(law, !last);
+    if (stop) {
+      stopped = true;
+      steps = s + 1;
+      break;
+    }
   }
   // The wall loads are read after a run: summed over the ranks at the last step in any case.
   if (steps > 0 && !stats && comm_.parallel() && !walls_.any_servo()) {
@@ -274,6 +289,7 @@ void Level::run_with(const Law& law, std::int64_t steps, bool stats) {
     walls_.reduce_loads(comm_);
   }
   if (steps > 0) kick<kPlanar>(ps_, dt_);
+  return stopped;
 }
 
 void Level::refresh_forces() {
@@ -302,14 +318,20 @@ void Level::apply_insertions_and_outlets() {
 void Level::run(std::int64_t steps, bool stats) {
   if (steps < 0) throw_invalid("Simulation.run.steps", "non-negative", steps);
   prepare();
+  start_guards();
+  // The overlap guard reads the contact statistics of the last step.
+  const bool stats_needed = stats || guards_.enabled;
+  bool stopped = false;
   std::visit(
       [&](const auto& law) {
         if (dimension_ == 2)
-          run_with<true>(law, steps, stats);
+          stopped = run_with<true>(law, steps, stats_needed);
         else
-          run_with<false>(law, steps, stats);
+          stopped = run_with<false>(law, steps, stats_needed);
       },
       law_);
+  if (stopped) raise_guard(guard_message_, step_fallback());
+  if (guards_.enabled && steps > 0) check_overlap_guard();
 }
 
 }  // namespace grainscale

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from . import contact, dist, fields, geometry, insert, io, parallel, scaling, timestep
 from .geometry import Box, Plane, Rectangle
+from .guards import Guards
 from .hierarchy import Exchange, Hierarchy, Level
 from .materials import Material
 from .sim_walls import WallHandle, WallMotion
@@ -18,6 +19,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Box",
     "Exchange",
+    "Guards",
     "Hierarchy",
     "Level",
     "Material",

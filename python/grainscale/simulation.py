@@ -21,12 +21,14 @@ from ._validate import positive, real_array, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .engine import Engine
 from .geometry import Box, Servo
+from .guards import GuardMethods, Guards
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
 from .placement import check_particles
 from .sim_checkpoint import CheckpointMethods
 from .sim_ranks import RankMethods
+from .sim_thermo import ThermoMethods
 from .sim_walls import WallHandle, WallMethods
 
 
@@ -38,7 +40,7 @@ class Output(Protocol):
     def write(self, sim: Simulation) -> Any: ...
 
 
-class Simulation(WallMethods, RankMethods, CheckpointMethods):
+class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, ThermoMethods):
     """A DEM simulation of spheres in a box, with walls and one contact law.
 
     Args:
@@ -67,6 +69,11 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
             same arguments; each owns the particles of its subdomain.
         processor_grid: (px, py, pz) ranks along x, y, z (px py pz = ranks); None chooses the
             grid with the smallest subdomain surface for the box's shape.
+        guards: per-step checks that stop a run (:class:`~grainscale.guards.Guards`: step
+            displacement and overlap as fractions of the radius, emergency checkpoint); None
+            means ``Guards()``, False switches them off.
+        lost_particles: ``"warn"`` (default), ``"error"`` or ``"ignore"``: the report of
+            particles removed through a closed side, once per run chunk (grainscale.guards).
 
     Example:
         >>> import grainscale as gs
@@ -92,6 +99,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         dimension: int = 3,
         comm: Any = None,
         processor_grid: Sequence[int] | None = None,
+        guards: Guards | bool | None = None,
+        lost_particles: str = "warn",
     ) -> None:
         if not isinstance(domain, Box):
             raise ValueError(f"Simulation.domain must be a grainscale.Box, got {domain!r}")
@@ -102,6 +111,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         handle = None if self._comm is None else int(self._comm.py2f())
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic, handle)
         self._level.set_dimension(int(dimension))
+        self._init_guards(guards, lost_particles)
         # the package's modules (insertion, checkpoints, fields, hierarchies) use this, never
         # _level (package-internal; grainscale/engine.py)
         self.engine = Engine(self._level, self._comm)
@@ -415,23 +425,6 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
         self.engine.check_unseen_writes()
         return np.asarray(self._level.neighbor_pairs())
 
-    def thermo(self) -> dict[str, float]:
-        """Current thermo quantities (see ``thermo_log``)."""
-        now = _time.perf_counter()
-        t0, s0 = self._rate_clock
-        rate = (self.step - s0) * self.num_particles / (now - t0) if now > t0 else 0.0
-        return {
-            "step": self.step,
-            "time": self.time,
-            "kinetic_energy": self.kinetic_energy(),
-            "contacts": self.num_contacts(),
-            "max_overlap_ratio": float(self._level.last_max_overlap_ratio()),
-            "particle_steps_per_second": rate,
-            "particles": self.num_particles,
-            "lost": self.lost_particles,
-        }
-
-    # ----------------------------------------------------------------- running
     def _push_interactions(self) -> None:
         """Resolve the interaction properties of every material pair (mixing rules)."""
         if self._interactions_for == len(self._materials):
@@ -517,7 +510,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 # ranks): only where they are read (the end of the run, a thermo line, an output).
                 stats = n == stop - self.step
                 t0 = _time.perf_counter()
-                self._level.run(n, stats)
+                self._run_chunk(n, stats)
                 self._adapt_chunk(n, _time.perf_counter() - t0)
                 if bar is not None:
                     bar.update(n)
@@ -578,22 +571,3 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods):
                 due = writer.next_step(self.step + 1, self.time + dt, dt)
             updated.append((writer, due))
         self._outputs = updated
-
-    def _log_thermo(self, print_line: bool, bar: Any = None) -> None:
-        entry = self.thermo()
-        self._rate_clock = (_time.perf_counter(), self.step)
-        self.thermo_log.append(entry)
-        if print_line and self.rank == 0:
-            # Lines go through the progress bar when one is shown, so they do not tear it.
-            write = bar.write if bar is not None else (lambda s: print(s, flush=True))
-            if not self._header_printed:
-                write(
-                    f"{'step':>10} {'time':>11} {'kinetic_energy':>15} {'contacts':>9} "
-                    f"{'max_overlap/r':>13} {'particle_steps/s':>16}"
-                )
-                self._header_printed = True
-            write(
-                f"{entry['step']:>10d} {entry['time']:>11.5g} {entry['kinetic_energy']:>15.6g} "
-                f"{entry['contacts']:>9d} {entry['max_overlap_ratio']:>13.4g} "
-                f"{entry['particle_steps_per_second']:>16.4g}"
-            )
