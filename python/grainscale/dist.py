@@ -245,6 +245,8 @@ class LogNormal(_Base):
     def __post_init__(self) -> None:
         median = positive("LogNormal", "median", self.median, " (m)")
         sigma = non_negative("LogNormal", "sigma", self.sigma)
+        if sigma > 10:  # exp(3 sigma) spans 13 decades: no radius distribution is that wide
+            raise ValueError(f"LogNormal.sigma must be at most 10, got {self.sigma!r}")
         lo = median * math.exp(-3.0 * sigma) if self.min is None else self.min
         hi = median * math.exp(3.0 * sigma) if self.max is None else self.max
         lo, hi = _bounds("LogNormal", lo, hi)

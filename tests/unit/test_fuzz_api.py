@@ -22,7 +22,7 @@ import grainscale as gs
 LONG = os.environ.get("GRAINSCALE_FUZZ") == "long"
 settings.register_profile(
     "grainscale",
-    max_examples=2000 if LONG else 60,
+    max_examples=2000 if LONG else 200,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
     derandomize=not LONG,  # the default run is reproducible
@@ -131,6 +131,8 @@ def test_size_distributions(lo, hi, mean, std) -> None:
     works_or_clear(gs.dist.Uniform, lo, hi)
     works_or_clear(gs.dist.Normal, mean, std)
     works_or_clear(gs.dist.Monodisperse, lo)
+    works_or_clear(gs.dist.LogNormal, lo, std)
+    works_or_clear(gs.dist.Discrete, [lo, hi], [mean, std])
 
 
 @given(
@@ -154,7 +156,7 @@ def test_simulation_options(gravity, time_step, skin, thermo_every, dimension) -
     )
 
 
-@settings(max_examples=400 if LONG else 40)
+@settings(max_examples=400 if LONG else 80)
 @given(
     position=arrays(2, 3),
     radius=st.one_of(scalars, arrays(2)),
