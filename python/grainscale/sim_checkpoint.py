@@ -62,6 +62,7 @@ class CheckpointMethods:
     def _check_checkpoint_extra(self, extra: dict[str, Any]) -> None:
         """Refuses a checkpoint written for another set-up (before anything changes); a file
         written before the set-up was recorded is checked by the core's signature only."""
+        self._saved_materials(extra)
         saved = extra.get("setup")
         if saved is None:
             return
@@ -77,13 +78,18 @@ class CheckpointMethods:
                     f"checkpoint was written for the {name} {saved.get(key)!r}, this simulation's "
                     f"is {here[key]!r}"
                 )
-        for k, fields_ in enumerate(extra.get("materials", [])):
-            material = Material(**fields_)
-            if k < len(self._materials) and self._materials[k] != material:
+
+    def _saved_materials(self, extra: dict[str, Any]) -> list[Material]:
+        """The checkpoint's materials, in order; ValueError where one differs from the material
+        this simulation registered at that index (a different order is a different set-up)."""
+        saved = [Material(**fields_) for fields_ in extra.get("materials", [])]
+        for k, (mine, theirs) in enumerate(zip(self._materials, saved, strict=False)):
+            if mine != theirs:
                 raise ValueError(
-                    f"checkpoint material {k} is {material}, this simulation has "
-                    f"{self._materials[k]}: the set-up differs"
+                    f"checkpoint material {k} is {theirs}, this simulation has {mine}: the set-up "
+                    "differs"
                 )
+        return saved
 
     def _checkpoint_extra(self) -> dict[str, Any]:
         return {
@@ -96,14 +102,8 @@ class CheckpointMethods:
 
     def _restore_checkpoint_extra(self, extra: dict[str, Any]) -> None:
         # Materials the set-up has not registered yet (those only particles use) are registered
-        # in the saved order; a different order is a different set-up.
-        for k, fields_ in enumerate(extra.get("materials", [])):
-            material = Material(**fields_)
-            if k < len(self._materials) and self._materials[k] != material:
-                raise ValueError(
-                    f"checkpoint material {k} is {material}, this simulation has "
-                    f"{self._materials[k]}: the set-up differs"
-                )
+        # in the saved order.
+        for material in self._saved_materials(extra):
             self.material_index(material)
         self._push_interactions()
         if extra.get("time_step") is not None:

@@ -31,6 +31,7 @@ settings.load_profile("grainscale")
 
 CLEAR = (ValueError, TypeError, RuntimeError)
 GLASS = gs.Material(density=2500, youngs_modulus=1e7, poisson_ratio=0.3)
+BOX = gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01))
 
 numbers = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),
@@ -143,10 +144,9 @@ def test_size_distributions(lo, hi, mean, std) -> None:
     dimension=scalars,
 )
 def test_simulation_options(gravity, time_step, skin, thermo_every, dimension) -> None:
-    box = gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01))
     works_or_clear(
         gs.Simulation,
-        domain=box,
+        domain=BOX,
         gravity=gravity,
         time_step=time_step,
         skin=skin,
@@ -182,15 +182,9 @@ def test_particles_and_runs(position, radius, velocity, steps, until) -> None:
         assert np.all(np.isfinite(p.position)) or len(p) == 0
 
 
-@given(
-    count=scalars,
-    fraction=scalars,
-    rate=scalars,
-    speed=vectors,
-    every=scalars,
-)
+@given(count=scalars, fraction=scalars, rate=scalars, speed=vectors, every=scalars)
 def test_insertion_operations(count, fraction, rate, speed, every) -> None:
-    region = gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01))
+    region = BOX
     works_or_clear(
         gs.insert.Pack,
         region=region,
