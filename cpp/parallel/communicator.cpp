@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/errors.hpp"
+#include "parallel/watchdog.hpp"
 
 #ifdef GRAINSCALE_HAVE_MPI
 #include <mpi.h>
@@ -45,6 +46,7 @@ Requests::~Requests() {
   // buffers under a live request would corrupt memory. Not after MPI_Finalize.
   int finalized = 0;
   MPI_Finalized(&finalized);
+  watchdog::WaitScope waiting("a ghost exchange (MPI_Waitall)");
   if (!finalized && list_ && !list_->pending.empty())
     MPI_Waitall(static_cast<int>(list_->pending.size()), list_->pending.data(),
                 MPI_STATUSES_IGNORE);
@@ -72,6 +74,7 @@ Communicator Communicator::from_fortran_handle(std::int64_t handle) {
   MPI_Comm_dup(MPI_Comm_f2c(static_cast<MPI_Fint>(handle)), &c.handle_->comm);
   MPI_Comm_rank(c.handle_->comm, &c.rank_);
   MPI_Comm_size(c.handle_->comm, &c.size_);
+  if (c.size_ > 1) watchdog::start();
   return c;
 #else
   (void)handle;
@@ -127,6 +130,7 @@ Real Communicator::max(Real v) const {
   if (!parallel()) return v;
 #ifdef GRAINSCALE_HAVE_MPI
   Real out = v;
+  watchdog::WaitScope waiting("a reduction (MPI_Allreduce)");
   MPI_Allreduce(&v, &out, 1, MPI_DOUBLE, MPI_MAX, handle_->comm);
   return out;
 #else
@@ -139,6 +143,7 @@ void Communicator::max_in_place(std::vector<Real>& v) const {
     if (std::isnan(x)) x = std::numeric_limits<Real>::infinity();
   if (!parallel() || v.empty()) return;
 #ifdef GRAINSCALE_HAVE_MPI
+  watchdog::WaitScope waiting("a reduction (MPI_Allreduce)");
   MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_MAX,
                 handle_->comm);
 #endif
@@ -159,6 +164,7 @@ std::int64_t Communicator::max(std::int64_t v) const {
   if (!parallel()) return v;
 #ifdef GRAINSCALE_HAVE_MPI
   std::int64_t out = v;
+  watchdog::WaitScope waiting("a reduction (MPI_Allreduce)");
   MPI_Allreduce(&v, &out, 1, MPI_INT64_T, MPI_MAX, handle_->comm);
   return out;
 #else
@@ -173,6 +179,7 @@ std::vector<char> Communicator::allgather(const std::vector<char>& mine,
     return mine;
   }
 #ifdef GRAINSCALE_HAVE_MPI
+  watchdog::WaitScope waiting("a gather (MPI_Allgather)");
   int n = static_cast<int>(mine.size());
   std::vector<int> sizes(size_), offsets(size_ + 1, 0);
   MPI_Allgather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, handle_->comm);
@@ -201,6 +208,7 @@ std::vector<char> Communicator::alltoall(const std::vector<std::vector<char>>& s
     throw std::logic_error("Communicator::alltoall needs one buffer per rank");
   if (!parallel()) return send[0];
 #ifdef GRAINSCALE_HAVE_MPI
+  watchdog::WaitScope waiting("an exchange (MPI_Alltoall)");
   std::vector<int> scount(size_), rcount(size_), soff(size_ + 1, 0), roff(size_ + 1, 0);
   for (int r = 0; r < size_; ++r) scount[r] = static_cast<int>(send[r].size());
   MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, handle_->comm);
@@ -224,6 +232,7 @@ std::vector<char> Communicator::sendrecv(const std::vector<char>& send, int dest
 #ifdef GRAINSCALE_HAVE_MPI
   if (parallel()) {
     const int to = dest < 0 ? MPI_PROC_NULL : dest, from = source < 0 ? MPI_PROC_NULL : source;
+    watchdog::WaitScope waiting("a message exchange (MPI_Sendrecv)");
     std::uint64_t n_send = send.size(), n_recv = 0;
     MPI_Sendrecv(&n_send, 1, MPI_UINT64_T, to, tag, &n_recv, 1, MPI_UINT64_T, from, tag,
                  handle_->comm, MPI_STATUS_IGNORE);
@@ -244,6 +253,7 @@ void Communicator::sendrecv_known(const void* send, std::size_t send_bytes, int 
   if (parallel()) {
     const int to = dest < 0 ? MPI_PROC_NULL : dest, from = source < 0 ? MPI_PROC_NULL : source;
     // Messages above 2 GiB are split: MPI counts are int.
+    watchdog::WaitScope waiting("a message exchange (MPI_Sendrecv)");
     const std::size_t chunk = std::size_t(1) << 30;
     std::size_t s = 0, r = 0;
     const char* sp = static_cast<const char*>(send);
@@ -305,6 +315,7 @@ void Communicator::wait(Requests& requests) const {
 #ifdef GRAINSCALE_HAVE_MPI
   if (!requests.list_) return;
   auto& pending = requests.list_->pending;
+  watchdog::WaitScope waiting("a ghost exchange (MPI_Waitall)");
   if (!pending.empty())
     MPI_Waitall(static_cast<int>(pending.size()), pending.data(), MPI_STATUSES_IGNORE);
   pending.clear();
@@ -316,6 +327,7 @@ void Communicator::wait(Requests& requests) const {
 void Communicator::broadcast(std::string& text, int root) const {
   if (!parallel()) return;
 #ifdef GRAINSCALE_HAVE_MPI
+  watchdog::WaitScope waiting("a broadcast (MPI_Bcast)");
   std::uint64_t n = text.size();
   MPI_Bcast(&n, 1, MPI_UINT64_T, root, handle_->comm);
   text.resize(n);

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _core
+from . import _core, parallel
 
 LOST_POLICIES = ("warn", "error", "ignore")
 _IDS_SHOWN = 10  # global ids named in a lost-particle report
@@ -171,7 +171,9 @@ class GuardMethods:
         # log_start (on each rank; gathered under MPI).
         ids = np.asarray(self._level.lost_log(log_start), dtype=np.int64)
         if self._comm is not None:
-            ids = np.concatenate([np.asarray(a, dtype=np.int64) for a in self._comm.allgather(ids)])
+            with parallel.waiting("Simulation.run (ids of lost particles)"):
+                every = self._comm.allgather(ids)
+            ids = np.concatenate([np.asarray(a, dtype=np.int64) for a in every])
         ids = np.sort(ids)
         shown = ", ".join(str(int(i)) for i in ids[:_IDS_SHOWN])
         more = ", ..." if len(ids) > _IDS_SHOWN else ""

@@ -11,6 +11,12 @@ Errors: the C++ core turns an error on one rank into the same exception on every
 next collective step. Python-side errors between run chunks (an output writer, a callback) go
 through :func:`agree`, which raises on every rank: the original exception where it happened,
 the same exception type with the original message (and the rank) elsewhere.
+
+A rank that stops answering (stuck in a loop, killed, or in a different call) would leave the
+others waiting for ever in their next collective. Every wait for other ranks, in the core and
+here, is watched: after :func:`timeout` seconds (600 by default, ``GRAINSCALE_MPI_TIMEOUT`` or
+:func:`set_timeout`) the waiting rank writes what it waited for to stderr and aborts the whole
+job with ``MPI_Abort``. Computation or output on one rank is never timed, only waits.
 """
 
 from __future__ import annotations
@@ -26,6 +32,32 @@ from . import _core
 
 # Launchers' environment variables that give the number of ranks (Open MPI, MPICH/Hydra, PMIx).
 _SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE")
+
+
+def set_timeout(seconds: float) -> None:
+    """Seconds a rank may wait for the other ranks in one collective call before the whole job
+    is aborted with a message naming the wait (0 switches the watchdog off). Process-wide.
+
+    >>> import grainscale as gs
+    >>> gs.parallel.set_timeout(120.0)
+    >>> gs.parallel.timeout()
+    120.0
+    >>> gs.parallel.set_timeout(600.0)
+    """
+    from ._validate import real
+
+    _core.set_mpi_timeout(real("parallel.set_timeout", "seconds", seconds))
+
+
+def timeout() -> float:
+    """The watchdog's limit in seconds (see :func:`set_timeout`)."""
+    return float(_core.mpi_timeout())
+
+
+def waiting(what: str) -> Any:
+    """Context manager around a blocking mpi4py call of the package: watched by the timeout
+    (``what`` names the call in the abort message)."""
+    return _core.MpiWait(what)
 
 
 def launched_ranks() -> int:
@@ -77,7 +109,8 @@ def agree(comm: Any, error: BaseException | None) -> None:
         if error is not None:
             raise error
         return
-    reports = comm.allgather(None if error is None else (type(error).__name__, str(error)))
+    with waiting("grainscale.parallel.agree (error agreement between run chunks)"):
+        reports = comm.allgather(None if error is None else (type(error).__name__, str(error)))
     failed = [r for r, rep in enumerate(reports) if rep is not None]
     if not failed:
         return
@@ -110,7 +143,8 @@ def same_arguments(comm: Any, call: str, **arguments: Any) -> None:
         return text if len(text) <= 80 else hashlib.sha256(text.encode()).hexdigest()[:16]
 
     mine = {k: fingerprint(v) for k, v in arguments.items()}
-    every = comm.allgather(mine)
+    with waiting(f"the argument agreement of {call}"):
+        every = comm.allgather(mine)
     differ = sorted(k for k in mine if len({str(e.get(k)) for e in every}) > 1)
     if differ:
         values = "; ".join(

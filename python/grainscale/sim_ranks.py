@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _core
+from . import _core, parallel
 from .particle_view import SCALAR_FIELDS, VECTOR_FIELDS
 
 if TYPE_CHECKING:
@@ -48,7 +48,8 @@ class RankMethods:
         with self.particles(writable=False) as p:
             local = {name: np.array(getattr(p, name)) for name in names}
         if self._comm is not None:
-            parts = self._comm.allgather(local)
+            with parallel.waiting("Simulation.gather"):
+                parts = self._comm.allgather(local)
             local = {name: np.concatenate([q[name] for q in parts]) for name in names}
         order = np.argsort(local["id"], kind="stable")
         return {name: a[order] for name, a in local.items()}
@@ -58,7 +59,8 @@ class RankMethods:
         ``particles()``) summed over the ranks, on every rank; ``value`` itself when serial."""
         if self._comm is None:
             return value
-        parts = self._comm.allgather(value)
+        with parallel.waiting("Simulation.sum_over_ranks"):
+            parts = self._comm.allgather(value)
         total = parts[0]
         for part in parts[1:]:  # in rank order: every rank gets the same bits
             total = total + part

@@ -452,7 +452,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
                 if self._comm is not None:
                     from mpi4py import MPI
 
-                    d_local = self._comm.allreduce(d_local, op=MPI.MAX)
+                    with parallel.waiting("Simulation.run (largest particle diameter)"):
+                        d_local = self._comm.allreduce(d_local, op=MPI.MAX)
                 d_max = max(d_max, d_local)
             self._level.set_skin(0.1 * d_max)
             self._skin_fixed = True
@@ -543,7 +544,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         spread over many steps. Under MPI every rank must take the same chunks: rank 0's timing
         decides."""
         if self._comm is not None:
-            elapsed = self._comm.bcast(elapsed, root=0)
+            with parallel.waiting("Simulation.run (chunk size from rank 0)"):
+                elapsed = self._comm.bcast(elapsed, root=0)
         if elapsed < 0.25 and n == self._chunk:
             self._chunk = min(2 * self._chunk, 100000)
         elif elapsed > 1.0 and self._chunk > 1:

@@ -43,11 +43,16 @@ from .checkpoint_file import (
 __all__ = ["FORMAT", "VERSION", "load", "load_hierarchy", "save", "save_hierarchy"]
 
 
+def _gather(comm: Any, state: Any, call: str) -> Any:
+    with parallel.waiting(f"{call} (gathering the ranks' states)"):
+        return comm.gather(state, root=0)
+
+
 def save(sim: Any, path: str | os.PathLike[str]) -> None:
     """Write the state of ``sim`` to the HDF5 file ``path`` (atomically; collective)."""
     state = sim.engine.save_state()
     comm = sim.comm
-    states = [state] if comm is None else comm.gather(state, root=0)
+    states = [state] if comm is None else _gather(comm, state, "Simulation.checkpoint")
     error: BaseException | None = None
     if sim.rank == 0:
         try:
@@ -65,7 +70,10 @@ def save_hierarchy(sims: list[Any], path: str | os.PathLike[str], coupling_state
         state = sim.engine.save_state()
         comm = sim.comm
         parts.append(
-            ([state] if comm is None else comm.gather(state, root=0), sim._checkpoint_extra())
+            (
+                [state] if comm is None else _gather(comm, state, "Hierarchy.checkpoint"),
+                sim._checkpoint_extra(),
+            )
         )
     error: BaseException | None = None
     if sims[0].rank == 0:
