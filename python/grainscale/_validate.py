@@ -69,6 +69,24 @@ def real_array(owner: str, name: str, value: object, *shapes: tuple[int | None, 
     return a
 
 
+def id_array(owner: str, name: str, value: object) -> np.ndarray:
+    """``value`` (a sequence or array of particle ids, any shape) as a flat int64 array,
+    refusing floats, bools, strings and ids outside int64."""
+    try:
+        a = np.asarray(value)
+    except Exception:
+        a = np.asarray(None)
+    if a.size == 0 and a.dtype.kind == "f":  # [] and np.array([])
+        return np.zeros(0, dtype=np.int64)
+    if a.dtype.kind not in "iu" or _holds_bool(value):
+        raise ValueError(
+            f"{owner}.{name} must be integer particle ids, got dtype {a.dtype} ({str(value)[:60]})"
+        )
+    if a.dtype.kind == "u" and a.size and a.max() > np.iinfo(np.int64).max:
+        raise ValueError(f"{owner}.{name} must be ids below 2**63, got {a.max()}")
+    return a.astype(np.int64).reshape(-1)
+
+
 def positive(owner: str, name: str, value: float, unit: str = "") -> float:
     """Return ``value`` as float if it is positive and finite, else raise ValueError."""
     v = real(owner, name, value, f"a positive number{unit}")
@@ -95,6 +113,19 @@ def non_negative(owner: str, name: str, value: float) -> float:
     if not (v >= 0 and math.isfinite(v)):
         raise ValueError(f"{owner}.{name} must be non-negative and finite, got {value!r}")
     return v
+
+
+def direction(owner: str, name: str, value: Sequence[float]) -> tuple[float, float, float]:
+    """A finite, non-zero 3-vector (a normal, an axis). One so long or short that its squared
+    length would overflow or underflow is brought to a largest component in [0.5, 1) by a
+    power of two: exact, so the unit vector the core derives keeps its bits."""
+    v = np.asarray(vector3(owner, name, value))
+    largest = float(np.max(np.abs(v)))
+    if largest == 0:
+        raise ValueError(f"{owner}.{name} must be a non-zero vector, got {value}")
+    if not 2.0**-500 < largest < 2.0**500:
+        v = np.ldexp(v, -math.frexp(largest)[1])
+    return (float(v[0]), float(v[1]), float(v[2]))
 
 
 def vector3(owner: str, name: str, value: Sequence[float]) -> tuple[float, float, float]:

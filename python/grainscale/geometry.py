@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from ._validate import non_negative, positive, vector3
+from ._validate import direction, non_negative, positive, real_array, vector3
 from .materials import Material
 
 
@@ -78,10 +78,7 @@ class Plane:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "point", vector3("Plane", "point", self.point))
-        n = vector3("Plane", "normal", self.normal)
-        if np.linalg.norm(n) == 0:
-            raise ValueError(f"Plane.normal must be a non-zero vector, got {self.normal}")
-        object.__setattr__(self, "normal", n)
+        object.__setattr__(self, "normal", direction("Plane", "normal", self.normal))
         object.__setattr__(self, "velocity", vector3("Plane", "velocity", self.velocity))
         if self.material is not None and not isinstance(self.material, Material):
             raise ValueError(f"Plane.material must be a Material or None, got {self.material!r}")
@@ -104,9 +101,12 @@ class Rectangle:
         object.__setattr__(self, "corner", vector3("Rectangle", "corner", self.corner))
         e1 = vector3("Rectangle", "edge1", self.edge1)
         e2 = vector3("Rectangle", "edge2", self.edge2)
-        if np.linalg.norm(np.cross(e1, e2)) == 0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            area = float(np.linalg.norm(np.cross(e1, e2)))
+        if not 0 < area < 1e300:  # 0: degenerate; beyond: the normal would overflow
             raise ValueError(
-                f"Rectangle.edge2 must be non-zero and not parallel to edge1, got {self.edge2}"
+                f"Rectangle.edge2 must be non-zero, not parallel to edge1 and span an area "
+                f"below 1e300 m^2 with it, got {self.edge2}"
             )
         object.__setattr__(self, "edge1", e1)
         object.__setattr__(self, "edge2", e2)
@@ -148,9 +148,7 @@ class Cylinder:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "point", vector3("Cylinder", "point", self.point))
-        a = vector3("Cylinder", "axis", self.axis)
-        if np.linalg.norm(a) == 0:
-            raise ValueError(f"Cylinder.axis must be a non-zero vector, got {self.axis}")
+        a = direction("Cylinder", "axis", self.axis)
         object.__setattr__(self, "axis", tuple(float(v) for v in np.divide(a, np.linalg.norm(a))))
         object.__setattr__(self, "radius", positive("Cylinder", "radius", self.radius, " (m)"))
         if self.length is not None:
@@ -210,10 +208,14 @@ class Mesh:
     origin: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
-        v = np.ascontiguousarray(np.asarray(self.vertices, dtype=float))
+        v = real_array("Mesh", "vertices", self.vertices, (None, 3))
         t = np.ascontiguousarray(np.asarray(self.triangles))
-        if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
-            raise ValueError(f"Mesh.vertices must be a finite (V, 3) array, got shape {v.shape}")
+        if len(v) and np.max(np.abs(v)) > 1e100:  # no geometry; sums of coordinates overflow
+            row = int(np.argmax(np.max(np.abs(v), axis=1)))
+            raise ValueError(
+                f"Mesh.vertices must lie within 1e100 m of the origin, got {v[row].tolist()} at "
+                f"vertex {row}"
+            )
         if t.ndim != 2 or t.shape[1] != 3 or t.shape[0] == 0:
             raise ValueError(f"Mesh.triangles must be a (T, 3) array, T > 0, got shape {t.shape}")
         if not np.issubdtype(t.dtype, np.integer) or t.min() < 0 or t.max() >= len(v):

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, cast
 import numpy as np
 
 from . import _core
-from ._validate import non_negative, positive, vector3
+from ._validate import direction, non_negative, positive, vector3
 from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
 from .materials import Material
@@ -113,9 +113,12 @@ class RectangleFace:
         object.__setattr__(self, "corner", vector3("RectangleFace", "corner", self.corner))
         e1 = vector3("RectangleFace", "edge1", self.edge1)
         e2 = vector3("RectangleFace", "edge2", self.edge2)
-        if np.linalg.norm(np.cross(e1, e2)) == 0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            area = float(np.linalg.norm(np.cross(e1, e2)))
+        if not 0 < area < 1e300:  # 0: degenerate; beyond: the normal would overflow
             raise ValueError(
-                f"RectangleFace.edge2 must be non-zero and not parallel to edge1, got {self.edge2}"
+                f"RectangleFace.edge2 must be non-zero, not parallel to edge1 and span an area "
+                f"below 1e300 m^2 with it, got {self.edge2}"
             )
         object.__setattr__(self, "edge1", e1)
         object.__setattr__(self, "edge2", e2)
@@ -134,10 +137,7 @@ class DiscFace:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "centre", vector3("DiscFace", "centre", self.centre))
-        n = vector3("DiscFace", "normal", self.normal)
-        if np.linalg.norm(n) == 0:
-            raise ValueError(f"DiscFace.normal must be a non-zero vector, got {self.normal}")
-        object.__setattr__(self, "normal", n)
+        object.__setattr__(self, "normal", direction("DiscFace", "normal", self.normal))
         object.__setattr__(self, "radius", positive("DiscFace", "radius", self.radius, " (m)"))
 
     def _to_core(self) -> _core.Face:

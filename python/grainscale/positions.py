@@ -9,7 +9,11 @@ import math
 
 import numpy as np
 
+from ._validate import is_real, positive, real_array
 from .geometry import Box
+
+_MAX_SITES = 1e8  # lattice sites: 2.4 GB of positions
+_MAX_RANDOM = 10**7  # random_in_box places one sphere at a time in Python (minutes at this size)
 
 __all__ = ["lattice", "random_in_box"]
 
@@ -36,11 +40,20 @@ def lattice(
     Returns:
         (count, 3) positions.
     """
-    if not spacing > 0:
-        raise ValueError(f"lattice.spacing must be positive (m), got {spacing!r}")
-    if not 0 <= jitter < 0.5 * spacing:
+    spacing = positive("lattice", "spacing", spacing, " (m)")
+    if not (is_real(jitter) and 0 <= jitter < 0.5 * spacing):
         raise ValueError(f"lattice.jitter must be in [0, spacing/2), got {jitter!r}")
-    n = np.floor(region.length / spacing + 1e-9).astype(int)
+    if count is not None and (isinstance(count, bool) or not isinstance(count, int | np.integer)):
+        raise ValueError(f"lattice.count must be an integer or None, got {count!r}")
+    with np.errstate(over="ignore"):
+        sites = np.floor(np.asarray(region.length) / spacing + 1e-9)
+        total = float(np.prod(sites))
+    if total > _MAX_SITES:  # also keeps the int cast below exact
+        raise ValueError(
+            f"lattice.spacing must leave at most {_MAX_SITES:.0e} sites in the region, got "
+            f"{spacing!r} m ({total:.3g} sites)"
+        )
+    n = sites.astype(int)
     if plane_z is not None:
         _check_plane("lattice", region, plane_z)
         n[2] = 1
@@ -129,9 +142,23 @@ def random_in_box(
         RuntimeError: if a particle cannot be placed (the region is too full); nothing is
             silently dropped.
     """
-    radii = np.atleast_1d(np.asarray(radius, dtype=float))
-    if radii.size == 1 and count is not None:
+    if np.ndim(radius) == 0:
+        radii = np.atleast_1d(positive("random_in_box", "radius", radius, " (m)"))  # type: ignore[arg-type]
+    else:
+        radii = real_array("random_in_box", "radius", radius, (None,))
+    if count is not None and radii.size == 1:
+        if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 0:
+            raise ValueError(f"random_in_box.count must be a non-negative integer, got {count!r}")
+        if count > _MAX_RANDOM:
+            raise ValueError(
+                f"random_in_box.count must be at most {_MAX_RANDOM:.0e} (placement in Python; "
+                f"insert.Pack places more), got {count}"
+            )
         radii = np.full(int(count), float(radii[0]))
+    if radii.size > _MAX_RANDOM:
+        raise ValueError(
+            f"random_in_box.radius must hold at most {_MAX_RANDOM:.0e} radii, got {radii.size}"
+        )
     if np.any(~(radii > 0)):
         raise ValueError("random_in_box.radius must be positive (m)")
     rng = np.random.default_rng(seed)
@@ -141,12 +168,14 @@ def random_in_box(
     if plane_z is not None:
         _check_plane("random_in_box", region, plane_z)
         axes = 2
-    cell = 2.0 * float(radii.max())
+    # Cells of at least the largest diameter (the neighbour search looks one cell around);
+    # at least a millionth of the region so that tiny radii keep cell indices in range.
+    cell = max(2.0 * float(radii.max()), 1e-6 * float(np.max(hi - lo)))
     grid: dict[tuple[int, int, int], list[int]] = {}
     pos = np.empty((radii.size, 3))
     for i in np.argsort(-radii, kind="stable"):
         r = radii[i]
-        if np.any((hi - lo)[:axes] <= 2 * r):
+        if np.any(0.5 * (hi - lo)[:axes] <= r):
             raise ValueError(f"random_in_box: region too small for radius {r}")
         for _ in range(max_attempts):
             p = rng.uniform(lo + r, hi - r)

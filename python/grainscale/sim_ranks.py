@@ -4,6 +4,7 @@ which holds the state (``_level``, ``_comm``)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING, Any
@@ -11,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import _core, parallel
+from ._validate import real
 from .particle_view import SCALAR_FIELDS, VECTOR_FIELDS
 
 if TYPE_CHECKING:
@@ -89,11 +91,17 @@ class RankMethods:
         """
         self.engine.check_unseen_writes()
         if every is not None:
-            if isinstance(every, bool) or int(every) != every or every < 0:
+            if isinstance(every, bool) or not isinstance(every, int | np.integer) or every < 0:
                 raise ValueError(
                     f"Simulation.balance.every must be a non-negative integer, got {every!r}"
                 )
-            self._level.set_auto_balance(int(every), float(threshold))
+            limit = real("Simulation.balance", "threshold", threshold)
+            if not 1.0 <= limit < math.inf:
+                raise ValueError(
+                    f"Simulation.balance.threshold must be >= 1 and finite (largest / mean work), "
+                    f"got {threshold!r}"
+                )
+            self._level.set_auto_balance(int(every), limit)
         self._resolve_defaults()
         before, after = self._level.balance()
         return {"before": float(before), "after": float(after)}

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from . import _core, parallel
-from ._validate import positive, real_array, vector3
+from ._validate import id_array, positive, real_array, vector3
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .engine import Engine
 from .geometry import Box, Servo
@@ -332,7 +332,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         """Delete the particles with these global ids (contact histories of the others are kept);
         ids not present are ignored. Returns the number deleted."""
         self.engine.check_unseen_writes()
-        a = np.asarray(ids, dtype=np.int64).reshape(-1)
+        a = id_array("Simulation.remove_particles", "ids", ids)
         return int(self._level.remove_particles(a.tolist()))
 
     # ----------------------------------------------------------------- state

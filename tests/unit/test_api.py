@@ -49,7 +49,7 @@ def small_sim(**kwargs) -> gs.Simulation:
         (lambda: gs.Plane(point=(0, 0, 0), normal=(0, 0, 0)), "Plane.normal must be a non-zero"),
         (
             lambda: gs.Rectangle(corner=(0, 0, 0), edge1=(1, 0, 0), edge2=(2, 0, 0)),
-            "Rectangle.edge2 must be non-zero and not parallel to edge1",
+            "Rectangle.edge2 must be non-zero, not parallel to edge1",
         ),
         (lambda: small_sim(time_step=0), "Simulation.time_step must be positive and finite"),
         (lambda: small_sim(skin=-1e-3), "Simulation.skin must be positive and finite"),

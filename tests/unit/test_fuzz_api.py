@@ -22,7 +22,7 @@ import grainscale as gs
 LONG = os.environ.get("GRAINSCALE_FUZZ") == "long"
 settings.register_profile(
     "grainscale",
-    max_examples=2000 if LONG else 200,
+    max_examples=5000 if LONG else 1500,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
     derandomize=not LONG,  # the default run is reproducible
@@ -156,7 +156,7 @@ def test_simulation_options(gravity, time_step, skin, thermo_every, dimension) -
     )
 
 
-@settings(max_examples=400 if LONG else 80)
+@settings(max_examples=1000 if LONG else 300)
 @given(
     position=arrays(2, 3),
     radius=st.one_of(scalars, arrays(2)),
@@ -198,6 +198,79 @@ def test_insertion_operations(count, fraction, rate, speed, every) -> None:
         gs.insert.Stream, face, mass_rate=rate, radius=5e-4, material=GLASS, velocity=speed
     )
     works_or_clear(gs.insert.Outlet, region=region, every=every)
+
+
+@given(gain=scalars, speed=scalars, force=scalars, velocity=vectors, spin=vectors, origin=vectors)
+def test_wall_motion_and_servos(gain, speed, force, velocity, spin, origin) -> None:
+    sim = gs.Simulation(domain=BOX, quiet=True)
+    wall = sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1), material=GLASS))
+    works_or_clear(wall.set_motion, velocity=velocity, angular_velocity=spin, origin=origin)
+    servo = works_or_clear(gs.geometry.Servo, gain=gain, max_speed=speed, target_force=force)
+    if servo is not None:
+        works_or_clear(setattr, wall, "servo", servo)
+    works_or_clear(sim.run, steps=2, progress=False)
+    assert np.all(np.isfinite(wall.position))
+
+
+@given(
+    displacement=scalars,
+    overlap=scalars,
+    enabled=scalars,
+    policy=st.one_of(st.sampled_from(["warn", "error", "ignore"]), scalars),
+    timeout=scalars,
+)
+def test_guards_policies_and_timeout(displacement, overlap, enabled, policy, timeout) -> None:
+    guards = works_or_clear(
+        gs.Guards, max_step_displacement=displacement, max_overlap=overlap, enabled=enabled
+    )
+    works_or_clear(gs.Simulation, domain=BOX, guards=guards, lost_particles=policy, quiet=True)
+    before = gs.parallel.timeout()
+    try:
+        works_or_clear(gs.parallel.set_timeout, timeout)
+        assert gs.parallel.timeout() >= 0
+    finally:
+        gs.parallel.set_timeout(before)
+
+
+@given(cg=scalars, lo=vectors, hi=vectors, gain=scalars, cell=scalars, scheme=scalars)
+def test_hierarchy_levels(cg, lo, hi, gain, cell, scheme) -> None:
+    region = works_or_clear(gs.Box, lo=lo, hi=hi)
+    exchange = works_or_clear(gs.Exchange, cell_size=cell, velocity_gain=gain)
+    level = works_or_clear(gs.Level, cg=cg, region=region, exchange=exchange)
+    base = gs.scaling.ParameterSet(domain=BOX, size=gs.dist.Monodisperse(2e-4), materials=(GLASS,))
+    if level is not None:
+        works_or_clear(gs.Hierarchy, base=base, levels=[gs.Level(cg=2.0), level], scheme=scheme)
+    works_or_clear(gs.scaling.scale, base, h=cg, scheme=scheme)
+    works_or_clear(gs.scaling.level_parameters, base, cg, region=(lo, hi), time_step=gain)
+
+
+@given(spacing=scalars, count=scalars, jitter=scalars, seed=scalars, every=scalars, step=scalars)
+def test_placement_helpers_and_outputs(spacing, count, jitter, seed, every, step) -> None:
+    works_or_clear(gs.insert.lattice, BOX, spacing=spacing, count=count, jitter=jitter, seed=seed)
+    works_or_clear(gs.insert.random_in_box, BOX, radius=spacing, count=count, seed=seed)
+    works_or_clear(gs.io.VTK, "unused", every=every, every_steps=step)
+    works_or_clear(gs.timestep.rayleigh_time, GLASS, radius=spacing)
+
+
+@settings(max_examples=1000 if LONG else 300)
+@given(
+    ids=st.one_of(arrays(3), st.lists(st.integers(-5, 50), max_size=5)),
+    fields=st.one_of(st.lists(st.sampled_from(["position", "id", "mass", "x", ""])), scalars),
+    every=scalars,
+    threshold=scalars,
+    path=st.one_of(st.just("missing.h5"), st.just(""), scalars),
+)
+def test_simulation_methods(ids, fields, every, threshold, path) -> None:
+    sim = gs.Simulation(domain=BOX, time_step=1e-6, quiet=True)
+    radius = np.full(8, 5e-4)
+    sim.add_particles(position=gs.insert.lattice(BOX, 2e-3, count=8), radius=radius, material=GLASS)
+    works_or_clear(sim.remove_particles, ids)
+    works_or_clear(sim.gather, fields)
+    works_or_clear(sim.balance, every=every, threshold=threshold)
+    works_or_clear(sim.add_outlet, works_or_clear(gs.insert.Outlet, region=BOX, every=every))
+    works_or_clear(sim.restart, path)
+    works_or_clear(sim.run, steps=3, progress=False)
+    assert sim.num_particles <= 8
 
 
 @pytest.mark.parametrize("value", [np.nan, "0.1", True, 1j, [[0.1]], -1e300])

@@ -344,7 +344,7 @@ def test_wall_torque_of_resting_sphere_is_lever_arm_cross_weight(kind: str) -> N
         ),
         (
             lambda: gs.geometry.Mesh(vertices=CUBE[:, :2], triangles=[[0, 1, 2]]),
-            "Mesh.vertices must be a finite (V, 3) array",
+            "Mesh.vertices must have shape (N, 3), got (8, 2)",
         ),
         (
             lambda: gs.geometry.Mesh(vertices=CUBE, triangles=np.zeros((0, 3), int)),

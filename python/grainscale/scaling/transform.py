@@ -267,7 +267,7 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
 
     Args:
         params: the reference (fine) parameter set.
-        h: size ratio, > 0 (h > 1 coarsens).
+        h: size ratio in [0.001, 1000] (h > 1 coarsens).
         scheme: "exact" (Feng & Owen 2014), "cg" (energy-density consistent coarse graining),
             "sakai" or "spa" (representative-particle schemes, for comparison studies); see
             :mod:`grainscale.scaling.table` for the factors and their sources.
@@ -289,6 +289,8 @@ def scale(params: ParameterSet, h: float, scheme: str = "exact", dimension: int 
     if not isinstance(params, ParameterSet):
         raise ValueError(f"scale.params must be a scaling.ParameterSet, got {params!r}")
     hv = positive("scale", "h", h)
+    if not 1e-3 <= hv <= 1e3:  # beyond, the factors (up to h**5) leave the useful float range
+        raise ValueError(f"scale.h must be in [0.001, 1000] (a size ratio), got {h!r}")
     table = factors(scheme, dimension)  # validates scheme and dimension
     law = params.contact  # one of the laws with rules here (ParameterSet checks it)
     if params.particles and table["domain_length"] != table["radius"]:
