@@ -5,7 +5,9 @@ It reads the case parameters (JSON), the initial positions/velocities (.npz) and
 written by the driver, builds the same case as the LIGGGHTS input (see hopper_case.py), runs it
 in chunks of ``sample_every`` steps (the LIGGGHTS thermo interval) and samples particle count,
 kinetic energy and mean height between chunks. Only the ``Simulation.run`` calls are timed
-(wall clock and process CPU time).
+(wall clock and process CPU time). ``--guards off`` switches the run-time guards off
+(``Simulation(guards=False)``) and ``--lost-particles`` sets the report of the discharged
+particles (lost through the box floor); guards_cost.py compares the two settings.
 """
 
 from __future__ import annotations
@@ -20,10 +22,17 @@ from typing import Any
 
 import numpy as np
 from hopper_case import HopperCase
-from settle_grainscale_worker import liggghts_matched_simulation, load_state
+from settle_grainscale_worker import add_guard_options, liggghts_matched_simulation, load_state
 
 
-def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> dict[str, Any]:
+def run(
+    case: HopperCase,
+    state_file: Path,
+    stl_file: Path,
+    deletion: str,
+    guards: bool = True,
+    lost_particles: str = "warn",
+) -> dict[str, Any]:
     """Build the case with the grainscale API, run it and return timings and observables."""
     import grainscale as gs  # imported here so that import time is outside the timed section
 
@@ -33,7 +42,9 @@ def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> di
 
     t_setup = time.perf_counter()
     lo, hi = case.box_lo, case.box_hi
-    sim, mat = liggghts_matched_simulation(gs, case, lo, hi, position, velocity)
+    sim, mat = liggghts_matched_simulation(
+        gs, case, lo, hi, position, velocity, guards, lost_particles
+    )
     mesh = gs.geometry.Mesh.from_stl(stl_file, material=mat)  # hopper of the particle material
     sim.add_wall(mesh)
     outlet = None
@@ -63,6 +74,8 @@ def run(case: HopperCase, state_file: Path, stl_file: Path, deletion: str) -> di
         "run_seconds": run_seconds,
         "cpu_seconds": cpu_seconds,
         "setup_seconds": setup_seconds,
+        "guards": bool(sim.guards.enabled),
+        "lost_particles_policy": sim.lost_particles_policy,
         "steps": int(sim.step),
         "n_triangles": int(len(mesh.triangles)),
         "n_vertices": int(len(mesh.vertices)),
@@ -111,11 +124,14 @@ def main(argv: list[str] | None = None) -> int:
         help="'domain' (lost at the box floor, as LIGGGHTS) or 'outlet[:every]' (gs Outlet)",
     )
     parser.add_argument("--output", type=Path, required=True, help="result file (JSON)")
+    add_guard_options(parser)
     args = parser.parse_args(argv)
     if not (args.deletion == "domain" or args.deletion.startswith("outlet")):
         parser.error(f"--deletion must be 'domain' or 'outlet[:every]', got {args.deletion!r}")
     case = HopperCase(**json.loads(args.case.read_text()))
-    result = run(case, args.state, args.stl, args.deletion)
+    result = run(
+        case, args.state, args.stl, args.deletion, args.guards == "on", args.lost_particles
+    )
     args.output.write_text(json.dumps(result, indent=1))
     return 0
 

@@ -3,9 +3,11 @@
 Running it alone keeps its peak memory (ru_maxrss) separate from the driver and from LIGGGHTS.
 It reads the case parameters (JSON) and the initial positions/velocities (.npz) written by the
 driver, builds the same case as the LIGGGHTS input (see settle_case.py), times only the
-``Simulation.run`` call and writes a JSON result file. Under ``mpirun -np N`` the simulation is
-decomposed over the N ranks (ranks synchronised before and after the timed call) and rank 0
-writes the result, with the particle and ghost counts of every rank.
+``Simulation.run`` call (wall clock and process CPU time) and writes a JSON result file. Under
+``mpirun -np N`` the simulation is decomposed over the N ranks (ranks synchronised before and
+after the timed call) and rank 0 writes the result, with the particle and ghost counts of every
+rank. ``--guards off`` switches the run-time guards off (``Simulation(guards=False)``) and
+``--lost-particles`` sets the lost-particle report; guards_cost.py compares the two settings.
 """
 
 from __future__ import annotations
@@ -22,7 +24,13 @@ import numpy as np
 from settle_case import SettleCase
 
 
-def run(case: SettleCase, state_file: Path, balance_every: int | None = None) -> dict[str, Any]:
+def run(
+    case: SettleCase,
+    state_file: Path,
+    balance_every: int | None = None,
+    guards: bool = True,
+    lost_particles: str = "warn",
+) -> dict[str, Any]:
     """Build the case with the grainscale API, run it and return timings and observables."""
     import grainscale as gs  # imported here so that import time is outside the timed section
 
@@ -30,7 +38,7 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
     rss_before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
     t_setup = time.perf_counter()
-    sim = settle_simulation(gs, case, position, velocity)
+    sim = settle_simulation(gs, case, position, velocity, guards, lost_particles)
     if balance_every is not None and sim.ranks > 1:
         sim.balance(every=balance_every)  # else the engine's default (every 500 steps)
     ke_initial = float(sim.kinetic_energy())
@@ -38,11 +46,12 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
 
     if sim.comm is not None:
         sim.comm.Barrier()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sim.run(steps=case.steps, progress=False)
     if sim.comm is not None:
         sim.comm.Barrier()
     run_seconds = time.perf_counter() - t0
+    cpu_seconds = time.process_time() - c0  # less sensitive than wall clock to a busy machine
 
     ke_total = float(sim.kinetic_energy())
     # Sums over this rank's particles (views, no copies: the peak memory is the engine's), then
@@ -70,7 +79,10 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
     return ranks | {
         "version": getattr(gs, "__version__", "unknown"),
         "run_seconds": run_seconds,
+        "cpu_seconds": cpu_seconds,
         "setup_seconds": setup_seconds,
+        "guards": bool(sim.guards.enabled),
+        "lost_particles_policy": sim.lost_particles_policy,
         "steps": int(sim.step),
         "n_final": n_final,
         "ke_initial": ke_initial,
@@ -84,11 +96,20 @@ def run(case: SettleCase, state_file: Path, balance_every: int | None = None) ->
     }
 
 
-def settle_simulation(gs: Any, case: SettleCase, position: np.ndarray, velocity: np.ndarray) -> Any:
+def settle_simulation(
+    gs: Any,
+    case: SettleCase,
+    position: np.ndarray,
+    velocity: np.ndarray,
+    guards: bool = True,
+    lost_particles: str = "warn",
+) -> Any:
     """The settle case: the particles in a closed box of six one-sided planes of their material
     (normals into the box)."""
     hi = case.box_hi
-    sim, mat = liggghts_matched_simulation(gs, case, (0.0, 0.0, 0.0), hi, position, velocity)
+    sim, mat = liggghts_matched_simulation(
+        gs, case, (0.0, 0.0, 0.0), hi, position, velocity, guards, lost_particles
+    )
     walls = [
         ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
         ((hi[0], 0.0, 0.0), (-1.0, 0.0, 0.0)),
@@ -122,10 +143,14 @@ def liggghts_matched_simulation(
     hi: tuple[float, float, float],
     position: np.ndarray,
     velocity: np.ndarray,
+    guards: bool = True,
+    lost_particles: str = "warn",
 ) -> tuple[Any, Any]:
     """A closed box with gravity along -z, the particles, and the material and Hertz-Mindlin law
     set as LIGGGHTS' 'gran model hertz tangential history' (shared by the benchmark workers;
-    ``case`` has the fields of SettleCase's physics). Returns (simulation, material)."""
+    ``case`` has the fields of SettleCase's physics). ``guards=False`` switches the run-time
+    guards off; ``lost_particles`` is the lost-particle policy (both grainscale's defaults
+    otherwise). Returns (simulation, material)."""
     mat = gs.Material(
         density=case.density,
         youngs_modulus=case.youngs_modulus,
@@ -146,6 +171,8 @@ def liggghts_matched_simulation(
         gravity=(0.0, 0.0, -case.gravity),
         time_step=case.time_step,
         skin=case.skin,
+        guards=guards,  # True: the default Guards()
+        lost_particles=lost_particles,
     )
     sim.add_particles(
         position=position, radius=0.5 * case.diameter, material=mat, velocity=velocity
@@ -166,14 +193,31 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--balance-every", type=int, default=None, help="automatic load balancing interval"
     )
+    add_guard_options(parser)
     args = parser.parse_args(argv)
     case = SettleCase(**json.loads(args.case.read_text()))
-    result = run(case, args.state, args.balance_every)
+    result = run(case, args.state, args.balance_every, args.guards == "on", args.lost_particles)
     from grainscale.parallel import launched_ranks
 
     if launched_ranks() == 1 or _rank() == 0:
         args.output.write_text(json.dumps(result, indent=1))
     return 0
+
+
+def add_guard_options(parser: argparse.ArgumentParser) -> None:
+    """--guards and --lost-particles (shared with the hopper worker)."""
+    parser.add_argument(
+        "--guards",
+        choices=("on", "off"),
+        default="on",
+        help="run-time guards: 'on' (grainscale's default) or 'off' (Simulation(guards=False))",
+    )
+    parser.add_argument(
+        "--lost-particles",
+        choices=("warn", "error", "ignore"),
+        default="warn",
+        help="Simulation(lost_particles=...): the report of particles lost (default 'warn')",
+    )
 
 
 def _rank() -> int:

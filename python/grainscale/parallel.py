@@ -22,6 +22,8 @@ job with ``MPI_Abort``. Computation or output on one rank is never timed, only w
 from __future__ import annotations
 
 import builtins
+import dataclasses
+import hashlib
 import os
 import sys
 from typing import Any
@@ -100,7 +102,37 @@ def resolve(comm: Any) -> Any:
             f"Simulation.comm must have one rank in this build of grainscale (built without MPI), "
             f"got a communicator of {comm.Get_size()} ranks"
         )
+    _abort_on_uncaught_exception()
     return comm
+
+
+_previous_hook: Any = None
+
+
+def _abort_on_uncaught_exception() -> None:
+    """From the first parallel simulation on, an exception that reaches the top of a rank's
+    script ends the whole job (as ``python -m mpi4py`` does): the traceback is printed, then
+    ``MPI_Abort``. Otherwise the other ranks would wait for this one in their next collective
+    until the watchdog's timeout."""
+    global _previous_hook
+    if _previous_hook is not None:
+        return
+    _previous_hook = sys.excepthook
+
+    def hook(kind: type[BaseException], value: BaseException, trace: Any) -> None:
+        _previous_hook(kind, value, trace)
+        from mpi4py import MPI
+
+        if MPI.Is_initialized() and not MPI.Is_finalized():
+            rank = MPI.COMM_WORLD.Get_rank()
+            sys.stderr.write(
+                f"grainscale: uncaught {kind.__name__} on rank {rank}; aborting every rank "
+                "(MPI_Abort)\n"
+            )
+            sys.stderr.flush()
+            MPI.COMM_WORLD.Abort(1)
+
+    sys.excepthook = hook
 
 
 def agree(comm: Any, error: BaseException | None) -> None:
@@ -127,22 +159,54 @@ def agree(comm: Any, error: BaseException | None) -> None:
     raise same if same is not None else RuntimeError(f"{name}: {text}")
 
 
+def _feed(digest: Any, value: Any, depth: int = 0) -> None:
+    """Every byte of ``value`` into ``digest``: arrays by content, dataclasses (walls, meshes,
+    materials) field by field, containers element by element (a repr would abbreviate)."""
+    if depth > 8:  # deeper structures (cycles) count by type only
+        digest.update(type(value).__qualname__.encode())
+    elif isinstance(value, np.ndarray):
+        digest.update(f"array{value.dtype}{value.shape}".encode())
+        digest.update(np.ascontiguousarray(value).tobytes())
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        digest.update(type(value).__qualname__.encode())
+        for f in dataclasses.fields(value):
+            _feed(digest, getattr(value, f.name), depth + 1)
+    elif isinstance(value, list | tuple):
+        digest.update(b"(")
+        for item in value:
+            _feed(digest, item, depth + 1)
+        digest.update(b")")
+    elif isinstance(value, dict):
+        for key in sorted(value, key=repr):
+            _feed(digest, key, depth + 1)
+            _feed(digest, value[key], depth + 1)
+    elif " at 0x" in repr(value) and hasattr(value, "__dict__"):  # an address differs by rank
+        digest.update(type(value).__qualname__.encode())
+        _feed(digest, vars(value), depth + 1)
+    else:
+        digest.update(f"{type(value).__qualname__}:{value!r};".encode())
+
+
+def _fingerprint(value: Any) -> str:
+    """A short text that differs when ``value`` differs: its repr when short and plain, else
+    a digest of its content."""
+    if not isinstance(value, np.ndarray | list | tuple | dict):
+        text = repr(value)
+        if len(text) <= 60 and " at 0x" not in text:
+            return text
+    digest = hashlib.sha256()
+    _feed(digest, value)
+    shape = f"array{value.shape}:" if isinstance(value, np.ndarray) else ""
+    return shape + digest.hexdigest()[:16]
+
+
 def same_arguments(comm: Any, call: str, **arguments: Any) -> None:
     """Collective: the arguments of a collective ``call`` compared over the ranks before it
     starts, so that ranks that disagree raise the same ValueError instead of waiting for each
     other forever. Arrays are compared by content (a digest of their bytes)."""
     if comm is None:
         return
-    import hashlib
-
-    def fingerprint(value: Any) -> str:
-        if isinstance(value, np.ndarray):
-            a = np.ascontiguousarray(value)
-            return f"array{a.shape}:" + hashlib.sha256(a.tobytes()).hexdigest()[:16]
-        text = repr(value)
-        return text if len(text) <= 80 else hashlib.sha256(text.encode()).hexdigest()[:16]
-
-    mine = {k: fingerprint(v) for k, v in arguments.items()}
+    mine = {k: _fingerprint(v) for k, v in arguments.items()}
     with waiting(f"the argument agreement of {call}"):
         every = comm.allgather(mine)
     differ = sorted(k for k in mine if len({str(e.get(k)) for e in every}) > 1)

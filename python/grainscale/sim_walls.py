@@ -96,6 +96,14 @@ class WallHandle:
     ) -> None:
         """Change the prescribed motion: translation velocity (m/s), rotation (rad/s) about
         ``origin`` (m; also the torque reference). None keeps a value."""
+        parallel.same_arguments(
+            self._sim.comm,
+            "WallHandle.set_motion",
+            wall=self.index,
+            velocity=velocity,
+            angular_velocity=angular_velocity,
+            origin=origin,
+        )
         lv, k = self._sim._level, self.index
         now = self.motion
         owner = "WallHandle.set_motion"
@@ -119,6 +127,7 @@ class WallHandle:
     @servo.setter
     def servo(self, servo: Servo | None) -> None:
         k = self.index
+        parallel.same_arguments(self._sim.comm, "WallHandle.servo", wall=k, servo=servo)
         if servo is None:
             self._sim._level.set_wall_servo(k, False, (0.0, 0.0, 1.0), 0.0, 0.0, 0.0)
             self._sim._wall_servos.pop(k, None)
@@ -188,6 +197,13 @@ class WallMethods:
                 present overlap by more than 10 % of their radius or lie behind
                 (grainscale.placement); False accepts it.
         """
+        parallel.same_arguments(
+            self.comm,
+            "Simulation.add_wall",
+            wall=wall,
+            servo=servo,
+            check_placement=check_placement,
+        )
         if check_placement and isinstance(wall, Plane | Rectangle | Cylinder):
             self._check_new_wall(wall)
         mat = -1 if wall.material is None else self.material_index(wall.material)

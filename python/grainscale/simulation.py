@@ -108,6 +108,20 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
             raise ValueError(f"Simulation.dimension must be 2 or 3, got {dimension!r}")
         self.domain = domain
         self._comm = parallel.resolve(comm)
+        parallel.same_arguments(
+            self._comm,
+            "Simulation",
+            domain=domain,
+            contact=contact,
+            gravity=gravity,
+            time_step=time_step,
+            skin=skin,
+            force_time_step=force_time_step,
+            dimension=dimension,
+            processor_grid=processor_grid,
+            guards=guards,
+            lost_particles=lost_particles,
+        )
         handle = None if self._comm is None else int(self._comm.py2f())
         self._level = _core.Level(domain.lo, domain.hi, domain.periodic, handle)
         self._level.set_dimension(int(dimension))
@@ -192,6 +206,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
 
     @time_step.setter
     def time_step(self, value: float) -> None:
+        parallel.same_arguments(self._comm, "Simulation.time_step", value=value)
         dt = positive("Simulation", "time_step", value, " (s)")
         self._level.set_time_step(dt, self._force_time_step)
         self._time_step = dt
@@ -203,6 +218,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
 
     @skin.setter
     def skin(self, value: float) -> None:
+        parallel.same_arguments(self._comm, "Simulation.skin", value=value)
         self._level.set_skin(positive("Simulation", "skin", value, " (m)"))
         self._skin_fixed = True
 
@@ -259,6 +275,16 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         """
         self.engine.check_unseen_writes()
         owner = "Simulation.add_particles"
+        parallel.same_arguments(
+            self._comm,
+            owner,
+            position=position,
+            radius=radius,
+            material=material,
+            velocity=velocity,
+            angular_velocity=angular_velocity,
+            check_placement=check_placement,
+        )
         pos = real_array(owner, "position", position, (None, 3), (3,)).reshape(-1, 3)
         n = pos.shape[0]
         rad = real_array(owner, "radius", radius, (), (n,))
@@ -297,6 +323,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         :class:`~grainscale.insert.StreamHandle` (requested / inserted / pending mass, counts).
         """
         self.engine.check_unseen_writes()
+        parallel.same_arguments(self._comm, "Simulation.insert", operation=operation)
         if isinstance(operation, Pack):
             return operation._insert(self)
         if isinstance(operation, Stream):
@@ -310,6 +337,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
     def add_outlet(self, outlet: Outlet) -> OutletHandle:
         """Register an outlet (particles inside its region are deleted during run()); returns
         its :class:`~grainscale.insert.OutletHandle` (removed count, mass and history)."""
+        parallel.same_arguments(self._comm, "Simulation.add_outlet", outlet=outlet)
         if not isinstance(outlet, Outlet):
             raise ValueError(
                 f"Simulation.add_outlet needs a grainscale.insert.Outlet, got {outlet!r}"
@@ -332,6 +360,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         """Delete the particles with these global ids (contact histories of the others are kept);
         ids not present are ignored. Returns the number deleted."""
         self.engine.check_unseen_writes()
+        parallel.same_arguments(self._comm, "Simulation.remove_particles", ids=ids)
         a = id_array("Simulation.remove_particles", "ids", ids)
         return int(self._level.remove_particles(a.tolist()))
 

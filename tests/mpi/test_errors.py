@@ -77,3 +77,28 @@ def test_mismatched_collective_arguments_raise_the_same_error_on_every_rank(worl
     assert sim.step == 10
     elapsed = world.allreduce(time.perf_counter() - started, op=max_op())
     assert elapsed < 30.0
+
+
+def test_set_up_calls_that_differ_between_ranks_are_refused_on_every_rank(world):
+    """Set-up calls change state every rank must hold alike (particles with global ids, wall
+    motion, the time step): different arguments raise the same ValueError everywhere, and a
+    bad value on one rank only never leaves the others waiting."""
+    sim = settle(world, 500)
+    glass = sim.materials[0]
+    rank = sim.rank
+    position = np.array([[0.001, 0.001, 0.001 + 1e-4 * rank]])
+    with pytest.raises(ValueError, match="add_particles is collective: .*same position, got rank"):
+        sim.add_particles(position=position, radius=1e-4, material=glass)
+    bad = np.array([[np.nan if rank == 1 else 0.001, 0.001, 0.001]])
+    with pytest.raises(ValueError, match="add_particles is collective: .*position"):
+        sim.add_particles(position=bad, radius=1e-4, material=glass)
+    floor = sim.walls[0]
+    with pytest.raises(ValueError, match="set_motion is collective: .*velocity"):
+        floor.set_motion(velocity=(0.0, 0.0, 1e-3 * rank))
+    with pytest.raises(ValueError, match="time_step is collective: .*value"):
+        sim.time_step = 1e-6 * (1 + rank)
+    with pytest.raises(ValueError, match="remove_particles is collective"):
+        sim.remove_particles([rank])
+    n = sim.num_particles
+    sim.run(steps=5)  # the ranks are still in step, nothing was added or removed
+    assert sim.num_particles == n

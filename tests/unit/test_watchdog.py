@@ -33,8 +33,10 @@ SCRIPT = textwrap.dedent(
                       material=glass)
     sim.run(steps=10)
     if MPI.COMM_WORLD.Get_rank() == 1:
+        if sys.argv[1] == "uncaught":
+            raise KeyError("the user's own error on rank 1")
         time.sleep(120)  # stops answering
-    if sys.argv[1] == "run":
+    if sys.argv[1] in ("run", "uncaught"):
         sim.run(steps=100)  # waits in the argument agreement (Python side)
     else:
         sim.kinetic_energy()  # waits in the core's sum over ranks
@@ -73,6 +75,20 @@ def test_rank_that_stops_answering_aborts_the_job(tmp_path: Path, mode: str, wai
     assert "rank 0 of 2 has waited" in done.stderr and wait in done.stderr
     assert "stopped answering" in done.stderr and "set_timeout" in done.stderr
     assert elapsed < 60
+
+
+@pytest.mark.skipif(
+    not _core.with_mpi() or shutil.which("mpirun") is None, reason="needs an MPI build and mpirun"
+)
+def test_uncaught_exception_on_one_rank_ends_the_job_at_once(tmp_path: Path) -> None:
+    """The script's own error on one rank: its traceback, then every rank ends (no wait for
+    the watchdog)."""
+    done, elapsed = _two_rank_job(tmp_path, "uncaught")
+    assert done.returncode != 0 and "finished" not in done.stdout
+    assert "KeyError" in done.stderr and "the user's own error on rank 1" in done.stderr
+    assert "uncaught KeyError on rank 1; aborting every rank" in done.stderr
+    assert "has waited" not in done.stderr  # not the watchdog: at once
+    assert elapsed < 30
 
 
 def test_timeout_is_set_and_checked() -> None:
