@@ -22,14 +22,7 @@ Real Wall::advance(Real dt, Real reach) {
     velocity = speed * servo.direction;
   }
   const Real w = angular_velocity.norm();
-  // A plane spinning about its normal or a cylinder about its axis keeps its shape in place:
-  // only the surface velocity changes.
-  bool in_place = false;
-  if (w > 0 && shape == WallShape::Plane)
-    in_place = angular_velocity.cross(normal).norm() <= 1e-12 * w;
-  if (w > 0 && shape == WallShape::Cylinder)
-    in_place = angular_velocity.cross(axis).norm() <= 1e-12 * w &&
-               (origin - point).cross(axis).norm() <= 1e-12 * (origin - point).norm();
+  const bool in_place = spins_in_place();
   if (w > 0 && !in_place) {
     const Eigen::AngleAxis<Real> turn(w * dt, angular_velocity / w);
     const Eigen::Matrix<Real, 3, 3> R = turn.toRotationMatrix();
@@ -50,6 +43,20 @@ Real Wall::advance(Real dt, Real reach) {
       for (Vec3& v : mesh->vertices) v += shift;
   }
   return shift.norm() + (in_place ? 0 : w * dt * reach);
+}
+
+bool Wall::spins_in_place() const {
+  const Real w = angular_velocity.norm();
+  if (w > 0 && shape == WallShape::Plane) return angular_velocity.cross(normal).norm() <= 1e-12 * w;
+  if (w > 0 && shape == WallShape::Cylinder)
+    return angular_velocity.cross(axis).norm() <= 1e-12 * w &&
+           (origin - point).cross(axis).norm() <= 1e-12 * (origin - point).norm();
+  return false;
+}
+
+Real Wall::step_bound(Real dt, Real reach) const {
+  const Real speed = servo.enabled ? std::max(servo.max_speed, velocity.norm()) : velocity.norm();
+  return dt * (speed + (spins_in_place() ? 0 : angular_velocity.norm() * reach));
 }
 
 }  // namespace grainscale

@@ -102,6 +102,26 @@ void Level::start_guards() {
   for (Index i = 0; i < ps_.n_owned(); ++i) r_min = std::min(r_min, ps_.radius[i]);
   guard_r_min_ = comm_.min(r_min);
   update_guard_limit();
+  check_wall_speeds();
+}
+
+void Level::check_wall_speeds() const {
+  // Walls are the same on every rank, and so is the smallest radius: all ranks throw alike.
+  const Real limit = guards_.max_step_displacement * guard_r_min_;
+  const auto& walls = walls_.walls();
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    const Real moved = walls[k].step_bound(dt_, walls_.reach(static_cast<int>(k)));
+    if (!(moved > limit)) continue;
+    std::ostringstream msg;
+    msg.precision(6);
+    msg << "guard stopped the run before step " << step_ << ": wall " << k << " moves up to "
+        << moved << " m per step (speed and rotation x dt " << dt_
+        << " s), more than max_step_displacement " << guards_.max_step_displacement
+        << " x the smallest radius " << guard_r_min_
+        << " m: particles could pass through it unseen; reduce the time step or the wall's "
+           "speed (a servo's max_speed counts)";
+    throw std::runtime_error(msg.str());
+  }
 }
 
 bool Level::step_guard_hit() {

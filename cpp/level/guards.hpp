@@ -9,6 +9,8 @@
 //   - overlap: a contact overlap above max_overlap x the smaller radius (x the radius for a
 //     wall), from the contact statistics (ContactStats::max_overlap_ratio) of the last step of
 //     each run() chunk.
+//   - wall speed: a wall that can move more than max_step_displacement x the smallest radius in
+//     one step (Wall::step_bound), checked when each run() chunk starts.
 //
 // A guard that trips throws std::runtime_error on every rank (Communicator::raise_if_any)
 // naming the particle (global id), the step, the value against the limit and a remedy. Guards

@@ -135,6 +135,8 @@ class Level {
   // overlaps more than max_overlap x the smaller radius. They only read: a run they do not stop
   // is bit-identical to one without them.
   void set_guards(const GuardLimits& limits);
+  // Throws if a wall moves more than max_step_displacement x the smallest radius in one step.
+  void check_wall_speeds() const;
   const GuardLimits& guards() const { return guards_; }
   // Whether a guard stopped the last run() (reset when the next one starts).
   bool guard_tripped() const { return guard_tripped_; }

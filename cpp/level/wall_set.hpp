@@ -27,6 +27,7 @@ class WallSet {
   void set_servo(int index, const Servo& servo);
 
   std::vector<Wall>& walls() { return walls_; }
+  Real reach(int index) const { return wall_reach_[index]; }
   const std::vector<Wall>& walls() const { return walls_; }
   const WallPrimitives& primitives() const { return primitives_; }
   std::size_t size() const { return walls_.size(); }

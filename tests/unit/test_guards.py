@@ -213,3 +213,38 @@ def test_guards_change_no_bit_of_a_settle_run():
         for field in ("position", "velocity", "angular_velocity", "force", "torque"):
             np.testing.assert_array_equal(getattr(p, field), getattr(q, field), err_msg=field)
     assert on.thermo()["kinetic_energy"] == off.thermo()["kinetic_energy"]
+
+
+def test_a_wall_faster_than_the_guard_stops_the_run_before_it_starts():
+    """A rectangle moving 2.5 radii per step would jump over the particles; a drum spinning
+    about its own axis only moves its surface and is let through."""
+    sim = gs.Simulation(domain=BOX, gravity=(0, 0, 0), time_step=5e-6, force_time_step=True)
+    sim.add_particles(position=[[0.01, 0.01, 0.01]], radius=1e-3, material=GLASS)
+    lid = sim.add_wall(
+        gs.Rectangle(corner=(0, 0, 0.015), edge1=(0.02, 0, 0), edge2=(0, 0.02, 0), material=GLASS)
+    )
+    lid.set_motion(velocity=(0, 0, -500.0))  # 2.5 mm per step
+    message = (
+        "guard stopped the run before step 0: wall 0 moves up to 0.0025 m per step (speed and "
+        "rotation x dt 5e-06 s), more than max_step_displacement 0.5 x the smallest radius "
+        "0.001 m: particles could pass through it unseen"
+    )
+    with pytest.raises(RuntimeError, match=re.escape(message)):
+        sim.run(steps=1)
+    assert sim.step == 0
+    lid.set_motion(velocity=(0, 0, -50.0))  # 0.25 mm per step: within the guard
+    sim.run(steps=1)
+    lid.set_motion(velocity=(0, 0, 0))
+    lid.servo = gs.geometry.Servo(target_force=1.0, gain=1.0, max_speed=200.0)
+    with pytest.raises(RuntimeError, match=r"wall 0 moves up to 0\.001 m per step"):
+        sim.run(steps=1)  # a servo counts at its largest speed
+
+    drum = gs.Simulation(domain=BOX, gravity=(0, 0, 0), time_step=5e-6, force_time_step=True)
+    drum.add_particles(position=[[0.01, 0.01, 0.01]], radius=1e-3, material=GLASS)
+    drum.add_wall(
+        gs.geometry.Cylinder(
+            point=(0.01, 0.01, 0), axis=(0, 0, 1), radius=0.009, angular_velocity=(0, 0, 1e4)
+        )
+    )
+    drum.run(steps=2)  # 0.45 mm of surface per step, but the drum stays in place
+    assert drum.step == 2
