@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from ._optional import mpi
 
 # Launchers' environment variables that give the number of ranks (Open MPI, MPICH/Hydra, PMIx).
 _SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE")
@@ -79,9 +80,7 @@ def world_rank() -> int:
     scripts that write their own files or print from one rank only)."""
     if launched_ranks() <= 1:
         return 0
-    from mpi4py import MPI
-
-    return int(MPI.COMM_WORLD.Get_rank())
+    return int(mpi().COMM_WORLD.Get_rank())
 
 
 def resolve(comm: Any) -> Any:
@@ -90,9 +89,7 @@ def resolve(comm: Any) -> Any:
     if comm is None:
         if launched_ranks() <= 1:
             return None
-        from mpi4py import MPI
-
-        comm = MPI.COMM_WORLD
+        comm = mpi().COMM_WORLD
     if not (hasattr(comm, "py2f") and hasattr(comm, "Get_size")):
         raise ValueError(f"Simulation.comm must be an mpi4py communicator or None, got {comm!r}")
     if comm.Get_size() == 1:
@@ -121,8 +118,7 @@ def _abort_on_uncaught_exception() -> None:
 
     def hook(kind: type[BaseException], value: BaseException, trace: Any) -> None:
         _previous_hook(kind, value, trace)
-        from mpi4py import MPI
-
+        MPI = mpi()
         if MPI.Is_initialized() and not MPI.Is_finalized():
             rank = MPI.COMM_WORLD.Get_rank()
             sys.stderr.write(

@@ -479,8 +479,9 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
                 with self.particles(writable=False) as p:
                     d_local = 2.0 * float(p.radius.max()) if len(p) else 0.0
                 if self._comm is not None:
-                    from mpi4py import MPI
+                    from ._optional import mpi
 
+                    MPI = mpi()
                     with parallel.waiting("Simulation.run (largest particle diameter)"):
                         d_local = self._comm.allreduce(d_local, op=MPI.MAX)
                 d_max = max(d_max, d_local)

@@ -89,10 +89,9 @@ def plot(
 ) -> None:
     """hopper.png: masses in the hopper and discharged, and the kinetic energy, against time
     (hist: the history rows; rate in kg/s, NaN if not measured)."""
-    import matplotlib
+    from .._optional import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     t = hist[:, 0]
     fig, (ax_m, ax_ke) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 6.5), dpi=150)
