@@ -193,9 +193,9 @@ class WallMethods:
         Args:
             wall: Plane, Rectangle, Cylinder or Mesh.
             servo: optional force/stress control of the wall's translation.
-            check_placement: refuse a plane, rectangle or cylinder wall that the particles
-                present overlap by more than 10 % of their radius or lie behind
-                (grainscale.placement); False accepts it.
+            check_placement: refuse a wall that the particles present overlap by more than
+                10 % of their radius or lie behind (a mesh: overlaps only, an open mesh has no
+                behind; grainscale.placement); False accepts it.
         """
         parallel.same_arguments(
             self.comm,
@@ -204,7 +204,7 @@ class WallMethods:
             servo=servo,
             check_placement=check_placement,
         )
-        if check_placement and isinstance(wall, Plane | Rectangle | Cylinder):
+        if check_placement and isinstance(wall, WallGeometry):
             self._check_new_wall(wall)
         mat = -1 if wall.material is None else self.material_index(wall.material)
         lv = self._level
@@ -238,9 +238,12 @@ class WallMethods:
             handle.servo = servo
         return handle
 
-    def _check_new_wall(self, wall: Plane | Rectangle | Cylinder) -> None:
+    def _check_new_wall(self, wall: WallGeometry) -> None:
         """Collective: ValueError on every rank if particles present overlap the new wall."""
-        reference = wall.corner if isinstance(wall, Rectangle) else wall.point
+        if isinstance(wall, Mesh):
+            reference: Any = wall.vertices
+        else:
+            reference = wall.corner if isinstance(wall, Rectangle) else wall.point
         error = None
         with self.particles(writable=False) as p:
             try:
@@ -249,7 +252,7 @@ class WallMethods:
                     self.domain,
                     np.array(p.position),
                     np.array(p.radius),
-                    [(wall, reference)],
+                    [(wall, reference, "the new wall")],
                     labels=np.array(p.id),
                     axes=3,
                 )

@@ -25,7 +25,7 @@ from .guards import GuardMethods, Guards
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
 from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
-from .placement import check_particles
+from .placement import check_new_particles
 from .sim_checkpoint import CheckpointMethods
 from .sim_ranks import RankMethods
 from .sim_thermo import ThermoMethods
@@ -269,9 +269,10 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
             velocity: (N, 3) or (3,) m/s, default zero.
             angular_velocity: (N, 3) or (3,) rad/s, default zero.
             check_placement: refuse particles larger than the box, with coordinates float64
-                cannot resolve, or overlapping a plane, rectangle or cylinder wall by more
-                than 10 % of their radius or behind it (grainscale.placement); False accepts
-                them.
+                cannot resolve, overlapping a wall by more than 10 % of their radius (or
+                behind a plane, rectangle or cylinder), or overlapping each other or the
+                particles present by more than 10 % of the smaller radius (grainscale.placement;
+                collective under MPI); False accepts them.
         """
         self.engine.check_unseen_writes()
         owner = "Simulation.add_particles"
@@ -293,7 +294,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
             i = int(np.argmax(rad <= 0))
             raise ValueError(f"{owner}.radius must be positive (m), got {rad[i]} at index {i}")
         if check_placement:
-            check_particles(owner, self.domain, pos, rad, self._walls, axes=self.dimension)
+            check_new_particles(self, owner, pos, rad)
         mat = np.full(n, self.particle_material_index(material, owner), dtype=np.int32)
 
         def rows(a: Any, name: str) -> np.ndarray | None:

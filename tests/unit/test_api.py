@@ -273,8 +273,11 @@ def test_results_do_not_depend_on_the_skin_contact_history_survives_rebuilds():
 
 def test_unstable_run_raises_instead_of_crashing():
     sim = small_sim(gravity=(0, 0, 0), time_step=1e-5)
-    sim.add_particles(
-        position=[[0.01, 0.01, 0.01], [0.0101, 0.01, 0.01]], radius=1e-3, material=GLASS
+    sim.add_particles(  # nearly coincident on purpose: past the set-up check
+        position=[[0.01, 0.01, 0.01], [0.0101, 0.01, 0.01]],
+        radius=1e-3,
+        material=GLASS,
+        check_placement=False,
     )
     with sim.particles() as p:
         p.velocity[0] = (float("nan"), 0.0, 0.0)
@@ -284,7 +287,9 @@ def test_unstable_run_raises_instead_of_crashing():
 
 def test_coincident_particles_do_not_produce_nan():
     sim = small_sim(gravity=(0, 0, 0), guards=False)  # the overlap guard would stop the run
-    sim.add_particles(position=[[0.01, 0.01, 0.01]] * 2, radius=1e-3, material=GLASS)
+    sim.add_particles(  # coincident on purpose: past the set-up check
+        position=[[0.01, 0.01, 0.01]] * 2, radius=1e-3, material=GLASS, check_placement=False
+    )
     sim.run(steps=1)
     with sim.particles() as p:
         assert np.isfinite(p.force).all()

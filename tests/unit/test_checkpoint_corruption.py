@@ -44,7 +44,9 @@ def populated() -> gs.Simulation:
     d = 1e-3
     pos = gs.insert.lattice(gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.004)), spacing=1.02 * d)
     rng = np.random.default_rng(3)
-    pos = pos + rng.uniform(-5e-5, 5e-5, pos.shape) + (0.5 * d, 0.5 * d, 0.5 * d)
+    # +-20 um on a 1.02 mm lattice: neighbours overlap by at most 20 um, 4 % of the radius
+    # (+-50 um made overlaps of up to 16 %, which the set-up check refuses)
+    pos = pos + rng.uniform(-2e-5, 2e-5, pos.shape) + (0.5 * d, 0.5 * d, 0.5 * d)
     sim.add_particles(position=pos, radius=0.5 * d, material=sim.materials[0])
     sim.run(steps=400, progress=False)
     return sim

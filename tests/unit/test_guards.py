@@ -31,10 +31,13 @@ def launched_at_wall(**kwargs) -> gs.Simulation:
 
 
 def overlapping_pair(**kwargs) -> gs.Simulation:
-    """Two particles created overlapping by 0.8 of their radius."""
+    """Two particles created overlapping by 0.8 of their radius (past the set-up check)."""
     sim = gs.Simulation(domain=BOX, gravity=(0, 0, 0), time_step=1e-6, **kwargs)
     sim.add_particles(
-        position=[[0.01, 0.01, 0.01], [0.0112, 0.01, 0.01]], radius=1e-3, material=GLASS
+        position=[[0.01, 0.01, 0.01], [0.0112, 0.01, 0.01]],
+        radius=1e-3,
+        material=GLASS,
+        check_placement=False,
     )
     return sim
 
