@@ -246,6 +246,22 @@ void export_level(py::module_& m) {
       .def(
           "wall_point", [](Level& l, int i) { return from_vec3(l.walls().at(i).point); },
           py::arg("index"))
+      .def(
+          "wall_frame",
+          [](Level& l, int i) {
+            // The current placement of a plane, rectangle or cylinder (for output).
+            const Wall& w = l.walls().at(i);
+            py::dict frame;
+            frame["point"] = from_vec3(w.point);
+            frame["normal"] = from_vec3(w.normal);
+            frame["edge1"] = from_vec3(w.edge1);
+            frame["edge2"] = from_vec3(w.edge2);
+            frame["axis"] = from_vec3(w.axis);
+            frame["moving"] = w.servo.enabled || w.velocity.squaredNorm() > 0 ||
+                              (w.angular_velocity.squaredNorm() > 0 && !w.spins_in_place());
+            return frame;
+          },
+          py::arg("index"))
       .def("run", &Level::run, py::arg("steps"), py::arg("stats") = true,
            py::call_guard<py::gil_scoped_release>())
       .def_property("record_contacts", &Level::record_contacts, &Level::set_record_contacts)

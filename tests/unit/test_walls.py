@@ -235,12 +235,66 @@ def test_vtk_writes_static_mesh_once(tmp_path: Path) -> None:
     np.testing.assert_array_equal(tri, t)
 
 
-def test_vtk_without_mesh_walls_writes_no_wall_files(tmp_path: Path) -> None:
+def test_vtk_writes_every_wall_type_where_it_is(tmp_path: Path) -> None:
+    """Planes clipped to the domain, rectangles, cylinders (an infinite one clipped to the box,
+    a drum spinning about its axis stays in place) and meshes, each triangle tagged with its
+    wall; a moving rectangle is written at every snapshot where it is then."""
     sim = vtk_sim()
     sim.add_wall(gs.Plane(point=(0, 0, -5e-3), normal=(0, 0, 1)))
-    sim.output(gs.io.VTK(tmp_path / "vtk", every_steps=100))
+    lid = sim.add_wall(
+        gs.Rectangle(corner=(-4e-3, -4e-3, 8e-3), edge1=(8e-3, 0, 0), edge2=(0, 8e-3, 0))
+    )
+    sim.add_wall(
+        gs.geometry.Cylinder(
+            point=(0, 0, 0), axis=(0, 0, 1), radius=9e-3, angular_velocity=(0, 0, 5.0)
+        )
+    )
+    sim.add_wall(
+        gs.geometry.Cylinder(
+            point=(0, 0, -9e-3), axis=(0, 0, 1), radius=1e-3, length=2e-3, inside=False
+        )
+    )
+    v, t = plate(z=-7e-3)
+    sim.add_wall(gs.geometry.Mesh(vertices=v, triangles=t))
+    lid.set_motion(velocity=(0, 0, -0.1))
+    sim.output(gs.io.VTK(tmp_path / "vtk", every_steps=100, binary=False))
     sim.run(steps=200)
-    assert not list((tmp_path / "vtk").glob("*walls*")), "wall files written without mesh walls"
+    walls = read_pvd(tmp_path / "vtk" / "particles_walls.pvd")
+    assert len(walls) == 3, f"{len(walls)} wall snapshots of a moving lid (expected 3)"
+    for time, name in walls:
+        pts, tri = read_ascii_vtp_mesh(tmp_path / "vtk" / name)
+        root = ET.parse(tmp_path / "vtk" / name).getroot()
+        tag = root.find("PolyData/Piece/CellData/DataArray[@Name='wall']")
+        assert tag is not None
+        wall = np.array((tag.text or "").split(), dtype=int)
+        counts = np.bincount(wall, minlength=5)
+        segments = gs.io.wall_surfaces.SEGMENTS
+        assert counts.tolist() == [2, 2, 2 * segments, 2 * segments, 2], counts
+        floor = pts[np.unique(tri[wall == 0])]
+        np.testing.assert_allclose(floor[:, 2], -5e-3, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(np.ptp(floor[:, :2], axis=0), 0.02, rtol=1e-12)  # the box
+        top = pts[np.unique(tri[wall == 1])]
+        np.testing.assert_allclose(top[:, 2], 8e-3 - 0.1 * time, rtol=0, atol=1e-12)
+        drum = pts[np.unique(tri[wall == 2])]
+        np.testing.assert_allclose(np.hypot(drum[:, 0], drum[:, 1]), 9e-3, rtol=1e-12)
+        np.testing.assert_allclose(np.sort(np.unique(drum[:, 2]))[[0, -1]], [-0.01, 0.01])
+        post = pts[np.unique(tri[wall == 3])]
+        np.testing.assert_allclose(np.sort(np.unique(post[:, 2])), [-9e-3, -7e-3], atol=1e-15)
+
+
+def test_plane_clipped_to_the_box_is_the_cut_polygon() -> None:
+    box = gs.Box(lo=(0, 0, 0), hi=(1, 1, 1))
+    pts, tri = gs.io.wall_surfaces.plane_in_box((0.5, 0.5, 0.5), (1, 1, 1), box)
+    assert len(pts) == 6 and len(tri) == 4  # a regular hexagon
+    np.testing.assert_allclose(pts.sum(axis=1), 1.5, atol=1e-14)
+    area = (
+        0.5
+        * np.linalg.norm(
+            np.cross(pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]]), axis=1
+        ).sum()
+    )
+    np.testing.assert_allclose(area, 3 * np.sqrt(3) / 4, rtol=1e-12)  # side sqrt(2)/2
+    assert len(gs.io.wall_surfaces.plane_in_box((0, 0, 2), (0, 0, 1), box)[0]) == 0  # misses
 
 
 # --------------------------------------------------------------------------------------------

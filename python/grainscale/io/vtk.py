@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from .wall_surfaces import wall_surfaces
+
 _ATTRIBUTE_ESCAPES = str.maketrans(
     {
         "&": "&amp;",
@@ -384,7 +386,10 @@ class VTK:
 
     Under MPI every rank writes its particles as ``<prefix>_<step:08d>_r<rank>.vtp`` (with a
     ``rank`` array) and rank 0 writes the parallel index ``<prefix>_<step:08d>.pvtp``, which
-    the .pvd lists; mesh walls are written by rank 0.
+    the .pvd lists. Rank 0 writes the walls, every type where it is at the snapshot (planes
+    clipped to the domain, rectangles, cylinders, meshes; grainscale.io.wall_surfaces), as
+    ``<prefix>_walls_<step:08d>.vtp`` with a cell array ``wall`` (the wall's index), listed in
+    ``<prefix>_walls.pvd``; once if no wall moves, else at every snapshot.
 
     Schedule (exactly one of):
         every: simulated-time interval, s. Snapshots at the first step whose time reaches each
@@ -478,28 +483,23 @@ class VTK:
         steps_ahead = math.ceil((target - float(time)) / float(time_step) - 1e-6)
         return max(step + steps_ahead, earliest)
 
-    def _write_meshes(self, sim: Any, step: int, time: float) -> None:
-        """Mesh walls: one .vtp per snapshot (all meshes, cell data ``wall``) in ``walls.pvd``;
-        written once when no mesh moves."""
-        meshes = sim.mesh_walls() if hasattr(sim, "mesh_walls") else []
-        if not meshes or getattr(sim, "rank", 0) != 0:
+    def _write_walls(self, sim: Any, step: int, time: float) -> None:
+        """Every wall (planes clipped to the domain, rectangles, cylinders, meshes): one .vtp
+        per snapshot (cell data ``wall``, the wall's index) in ``<prefix>_walls.pvd``; written
+        once when no wall moves."""
+        if not getattr(sim, "walls", None) or getattr(sim, "rank", 0) != 0:
             return
-        moving = any(m["moving"] for m in meshes)
-        if not moving and getattr(self, "_walls_written", False):
+        surfaces = wall_surfaces(sim)
+        if not surfaces.moving and getattr(self, "_walls_written", False):
             return
-        vertices, triangles, wall = [], [], []
-        offset = 0
-        for m in meshes:
-            vertices.append(m["vertices"])
-            triangles.append(m["triangles"] + offset)
-            wall.append(np.full(len(m["triangles"]), m["index"], dtype=np.int32))
-            offset += len(m["vertices"])
+        if len(surfaces.triangles) == 0:
+            return
         name = f"{self.prefix}_walls_{step:08d}.vtp"
         write_vtp_mesh(
             self.directory / name,
-            np.concatenate(vertices),
-            np.concatenate(triangles),
-            cell_data={"wall": np.concatenate(wall)},
+            surfaces.vertices,
+            surfaces.triangles,
+            cell_data={"wall": surfaces.wall},
             binary=self.binary,
             appended=self.appended,
         )
@@ -547,7 +547,7 @@ class VTK:
             self.pvd.add(time, name)
         if not self.files or self.files[-1] != path:
             self.files.append(path)
-        self._write_meshes(sim, step, time)
+        self._write_walls(sim, step, time)
         self._last_step = step
         if self.every is not None:
             dt = self._time_step if self._time_step is not None else getattr(sim, "time_step", 0)
