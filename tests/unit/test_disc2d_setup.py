@@ -166,7 +166,8 @@ def test_vtk_output_in_2d(tmp_path: Path) -> None:
     sim = populated_bed()
     sim.output(gs.io.VTK(tmp_path, every_steps=100))
     sim.run(steps=200, progress=False)
-    files = sorted(tmp_path.glob("*.vtp"))
+    files = sorted(tmp_path.glob("particles_0*.vtp"))
     assert len(files) == 3
+    assert len(list(tmp_path.glob("particles_walls_*.vtp"))) == 3  # the servo lid moves
     piece = ET.parse(files[-1]).getroot().find(".//Piece")
     assert piece is not None and piece.get("NumberOfPoints") == "150"
