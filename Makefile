@@ -2,6 +2,7 @@
 #   make demo    run the demo case (writes VTK files, a PNG plot and a summary)
 #   make test    build, install and run the test suite
 #   make bench   side-by-side benchmark against LIGGGHTS (installs it if missing)
+#   make docs    build the documentation site into build/docs (open build/docs/index.html)
 
 SHELL := /bin/bash
 PYTHON ?= python3
@@ -10,7 +11,7 @@ PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' \) 2>/dev/null) CMakeLists.txt pyproject.toml
 
-.PHONY: all system-deps venv install demo test test-mpi test-cpp bench bench-cpp lint format clean
+.PHONY: all system-deps venv install demo test test-mpi test-cpp docs bench bench-cpp lint format clean
 
 # mpirun for the MPI tests and benchmarks: allowed as root (CI runs as root).
 MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun
@@ -33,7 +34,7 @@ venv: $(VENV)/bin/python
 
 $(VENV)/.installed: $(SOURCES) | system-deps $(VENV)/bin/python
 	$(PY) -m pip install --quiet scikit-build-core pybind11 cmake ninja
-	$(PY) -m pip install --quiet --no-build-isolation ".[test,dev]"
+	$(PY) -m pip install --quiet --no-build-isolation ".[test,dev,docs]"
 	@touch $@
 
 install: system-deps $(VENV)/.installed
@@ -41,11 +42,19 @@ install: system-deps $(VENV)/.installed
 demo: install
 	$(VENV)/bin/grainscale demo --output out/demo
 
-# Lint, the C++ unit tests (serial build), the Python suite (unit, physics validation, demo),
+# Lint, the C++ unit tests (serial build), the documentation site (warnings are errors), the
+# Python suite (unit, physics validation, demo, the docs' code blocks and docstring examples),
 # then the MPI tests on 2 ranks and on 3 (more ranks than cores).
-test: install lint test-cpp
+test: install lint test-cpp docs
 	$(PY) -m pytest -q tests
 	$(MAKE) --no-print-directory test-mpi
+
+# The documentation site: Sphinx (MyST Markdown pages, API reference from the docstrings) into
+# build/docs; warnings are errors and every internal reference and link is checked (-n).
+docs: install
+	rm -rf build/docs
+	$(PY) -m sphinx -W --keep-going -n -q -b html docs build/docs
+	@echo "documentation: build/docs/index.html"
 
 # Every rank runs the same tests (tests/mpi); a hang would be killed by the timeout.
 test-mpi: install
@@ -67,13 +76,13 @@ bench-cpp: install
 	./build/bench/bench_neighbor_build
 
 lint: install
-	$(VENV)/bin/ruff check python tests bench studies
-	$(VENV)/bin/ruff format --check python tests bench studies
+	$(VENV)/bin/ruff check python tests bench studies docs
+	$(VENV)/bin/ruff format --check python tests bench studies docs
 	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 format: install
-	$(VENV)/bin/ruff format python tests bench studies
-	$(VENV)/bin/ruff check --fix python tests bench studies
+	$(VENV)/bin/ruff format python tests bench studies docs
+	$(VENV)/bin/ruff check --fix python tests bench studies docs
 	$(VENV)/bin/clang-format -i $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 clean:

@@ -7,7 +7,7 @@ Mindlin-type tangential spring with Coulomb limit, and an optional rolling resis
     law = Linear(normal_stiffness=1e5, restitution=0.9)
     law = EEPA(unloading_ratio=3, adhesive_stiffness=50.0, pull_off_force=-1e-4)
 
-Conventions (DESIGN.md 2.4): compression positive, overlap d = r_i + r_j - |x_i - x_j|,
+Conventions (DESIGN.md 2.4): compression positive, overlap ``d = r_i + r_j - |x_i - x_j|``,
 effective radius R*, mass m*, moduli E*, G* as in validation/CASES.md section 0; SI units.
 
 Interaction properties per material pair — restitution, friction, rolling friction, rolling
@@ -38,7 +38,7 @@ from .materials import Material
 
 @dataclass(frozen=True)
 class CDT:
-    """Constant directional torque: M = -mu_r R* F_n w_r/|w_r| (it oscillates at rest).
+    """Constant directional torque: ``M = -mu_r R* F_n w_r/|w_r|`` (it oscillates at rest).
 
     Args:
         rolling_friction: mu_r >= 0 (dimensionless).
@@ -56,7 +56,7 @@ class CDT:
 class EPSD:
     """Elastic–plastic spring–dashpot rolling resistance (Ai et al. 2011).
 
-    k_r = 2.25 k_n mu_r^2 R*^2; spring torque limited to mu_r R* |F_n|; damping
+    k_r = 2.25 k_n mu_r^2 R*^2; spring torque limited to ``mu_r R* |F_n|``; damping
     eta_r 2 sqrt(I_r k_r) only while below the limit.
 
     Args:
@@ -250,9 +250,9 @@ class _Law:
 class HertzMindlin(_Law):
     """Hertz–Mindlin with nonlinear damping from the restitution coefficient (the default law).
 
-    F_n = 4/3 E* sqrt(R* d) d + 2 sqrt(5/6) |beta| sqrt(2 E* sqrt(R* d) m*) d', with
+    ``F_n = 4/3 E* sqrt(R* d) d + 2 sqrt(5/6) |beta| sqrt(2 E* sqrt(R* d) m*) d'``, with
     beta = ln e / sqrt(ln^2 e + pi^2); tangential spring k_t = 8 G* sqrt(R* d) with history,
-    damping of the same form, Coulomb limit |F_t| <= friction * max(F_n, 0).
+    damping of the same form, Coulomb limit ``|F_t| <= friction * max(F_n, 0)``.
 
     Args:
         restitution: coefficient of normal restitution e in [0, 1]. With tension allowed the
@@ -278,7 +278,7 @@ class HertzMindlin(_Law):
 @dataclass(frozen=True)
 class Linear(_Law):
     """Linear spring–dashpot: F_n = k_n d + c_n d', c = 2 zeta sqrt(k m*),
-    zeta = |ln e| / sqrt(ln^2 e + pi^2) (exact restitution e with tension allowed).
+    ``zeta = |ln e| / sqrt(ln^2 e + pi^2)`` (exact restitution e with tension allowed).
 
     Args:
         normal_stiffness: k_n (N/m). None derives it per contact from E*, R*, m* and

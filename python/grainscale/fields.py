@@ -2,7 +2,7 @@
 stress tensor (kinetic + contact virial, compression positive), velocity range and velocity
 spread (standard deviation about the Favre velocity, m/s per component) on a grid of hexahedral
 cells; the averaging is done in C++ (cpp/field/cell_average.hpp, which gives the
-definitions). The hierarchy's exchange uses the same averages.
+definitions). The hierarchy's exchange uses the same averages::
 
     avg = gs.fields.CellAverages(sim, gs.Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.05)), cell_size=0.01)
     for _ in range(10):

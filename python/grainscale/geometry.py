@@ -19,7 +19,8 @@ class Box:
     """An axis-aligned box [lo, hi] in m, periodic or closed per axis.
 
     Example:
-        >>> Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.2), periodic=(True, True, False)).volume
+        >>> box = Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.2), periodic=(True, True, False))
+        >>> round(box.volume, 12)  # m^3
         0.002
     """
 

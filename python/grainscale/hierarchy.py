@@ -1,10 +1,10 @@
 """Multi-level coarse graining (MLCG, DESIGN.md 4; Queteschiner et al. 2018): several
 resolutions of one material in one run, coupled two-way by volume-averaged fields.
 
-A :class:`Hierarchy` is built from one reference :class:`~grainscale.scaling.ParameterSet`
-(the fully resolved system, h = 1) and a list of :class:`Level` s: the coarsest simulates the
-whole system, every finer one only its ``region`` (a box, a finite cylinder or a closed mesh),
-which must lie inside the region of a coarser level, its parent. Each level is a complete
+A :class:`Hierarchy` is built from one reference :class:`~grainscale.scaling.ParameterSet` (the
+fully resolved system, h = 1) and a list of :class:`~grainscale.Level` s: the coarsest simulates
+the whole system, every finer one only its ``region`` (a box, a finite cylinder or a closed
+mesh), which must lie inside the region of a coarser level, its parent. Each level is a complete
 Simulation whose parameters come from :func:`grainscale.scaling.scale` with its ratio ``cg``
 (scheme ``"cg"`` by default) and whose time step is its own (the exchange interval is a whole
 number of steps of every level). The parent keeps simulating inside its child's region: its
@@ -12,7 +12,7 @@ particles there are the child's material at its own resolution (its "shadow").
 
 **One material, exact books.** Each level holds the material where it is the finest (the
 coarsest: outside every region); an exchange grid generated from each region carries it across
-the interface faces. Every exchange interval (:class:`Exchange`):
+the interface faces. Every exchange interval (:class:`~grainscale.Exchange`):
 
 1. the parent runs the interval; a flux meter books, per interface face, the mass its particles
    carry into the region (owed to the child) and out of it (owed by the child), and its particles
@@ -25,10 +25,10 @@ the interface faces. Every exchange interval (:class:`Exchange`):
    ``Exchange.max_lag`` of its particles it pays by removing its particles in the interior cells
    where it holds more than the child (then nearest to where the child discharged): a coarse bed
    jammed at an orifice it cannot pass follows the fine discharge all the same. So the coarsest
-   level always holds the inventory of the equipment, and :meth:`Hierarchy.mass_balance` closes
-   to round-off. Where the child's boundary cells hold less than a dense parent bed above them,
-   the child may also place particles ahead of the flux (``Exchange.advance``), which the flux
-   then repays.
+   level always holds the inventory of the equipment, and
+   :meth:`~grainscale.Hierarchy.mass_balance` closes to round-off. Where the child's boundary
+   cells hold less than a dense parent bed above them, the child may also place particles ahead
+   of the flux (``Exchange.advance``), which the flux then repays.
 3. both levels average mass, Favre velocity, solid fraction and stress on the exchange cells, and
    the controllers of :mod:`grainscale.coupling` set (a) the fine -> coarse velocity feedback in
    the interior cells, limited by the child's velocities so that it starts a jammed coarse bed,

@@ -22,7 +22,7 @@ that cannot reach its target raises ``RuntimeError`` and inserts nothing; stream
 find no room stay pending and are retried at the next batch.
 
 The set-up helpers that only return positions (:func:`lattice`, :func:`random_in_box`, for
-``Simulation.add_particles``) live in :mod:`grainscale.positions` and are re-exported here.
+``Simulation.add_particles``) live in ``grainscale.positions`` and are re-exported here.
 """
 
 from __future__ import annotations
@@ -331,7 +331,7 @@ class Stream:
 
     @property
     def volume_fraction(self) -> float:
-        """Solid fraction of the stream crossing the face: rate / (density area normal speed)."""
+        """Solid fraction of the stream crossing the face, rate / (density area normal speed)."""
         speed = abs(float(np.dot(self.velocity, self._normal())))
         if isinstance(self.face, DiscFace):
             area = math.pi * self.face.radius**2
@@ -399,7 +399,7 @@ class StreamHandle:
 
     @property
     def scheduled_mass(self) -> float:
-        """inserted_mass + pending_mass: what the batches so far asked for, kg."""
+        """What the batches so far asked for (inserted_mass + pending_mass), kg."""
         return float(self._engine.stream_status(self.index)["scheduled_mass"])
 
     @property
@@ -493,7 +493,7 @@ class OutletHandle:
 
     @property
     def removed_moment(self) -> np.ndarray:
-        """Sum of m x over the particles removed so far (kg m): their centre of mass is
+        """Sum of m x over the particles removed so far (kg m); their centre of mass is
         ``removed_moment / removed_mass``."""
         return np.asarray(self._engine.outlet_status(self.index)["removed_moment"], float)
 

@@ -217,7 +217,7 @@ def in_cells(grid: dict[str, Any], x: np.ndarray) -> np.ndarray:
 
 
 def describe_balance(b: dict[str, Any]) -> str:
-    """A few lines of a :meth:`Hierarchy.mass_balance` (grams; unaccounted in kg)."""
+    """A few lines of a :meth:`~grainscale.Hierarchy.mass_balance` (grams; unaccounted in kg)."""
     g = 1e3
     lines = [
         f"hierarchy: initial {b['initial'] * g:.3f} g + inserted {b['inserted'] * g:.3f} g = "

@@ -70,7 +70,7 @@ class WallHandle:
 
     @property
     def position(self) -> np.ndarray:
-        """Current reference point (m): plane point, rectangle corner, point on a cylinder's
+        """Current reference point (m) — the plane point, rectangle corner, point on a cylinder's
         axis, mesh origin (moves with the wall)."""
         return np.array(self._sim._level.wall_point(self.index))
 
@@ -120,7 +120,7 @@ class WallHandle:
 
     @property
     def servo(self) -> Servo | None:
-        """The servo control of the wall's translation (None: prescribed motion only). Setting
+        """The servo control of the wall's translation, or None for prescribed motion only. Setting
         it validates it against the wall; None switches it off."""
         return self._sim._wall_servos.get(self.index)
 

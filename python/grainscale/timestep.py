@@ -12,8 +12,8 @@ def rayleigh_time(material: Material, radius: float) -> float:
     Example:
         >>> from grainscale import Material
         >>> glass = Material(density=2500, youngs_modulus=5e7, poisson_ratio=0.3)
-        >>> f"{rayleigh_time(glass, 1e-3):.3e}"
-        '1.212e-05'
+        >>> f"{rayleigh_time(glass, 1e-3):.3e}"  # G = E / (2 (1 + nu)) = 19.2 MPa
+        '3.870e-05'
     """
     if material.rigid:
         raise ValueError(

@@ -392,9 +392,12 @@ class VTK:
     ``<prefix>_walls.pvd``; once if no wall moves, else at every snapshot.
 
     Schedule (exactly one of):
-        every: simulated-time interval, s. Snapshots at the first step whose time reaches each
-            multiple of ``every`` (t = 0, every, 2 every, ...).
-        every_steps: step interval. Snapshots at the steps that are multiples of ``every_steps``.
+
+    * ``every``: simulated-time interval, s. Snapshots at the first step whose time reaches each
+      multiple of ``every`` (t = 0, every, 2 every, ...).
+    * ``every_steps``: step interval. Snapshots at the steps that are multiples of
+      ``every_steps``.
+
     In both cases the first scheduled call writes at once (the step when the writer is attached).
 
     Protocol used by the Simulation: ``next_step(step, time, time_step)`` returns the next step
