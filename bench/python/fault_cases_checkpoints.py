@@ -277,7 +277,7 @@ def restart_replaces_time_step(t: Probe) -> None:
     restart_into(t, lambda: bed(time_step=1e-6))
 
 
-@case(K, "wall 0|walls", "0.005")
+@case(K, "wall 4|walls", "0.005")
 def restart_wall_moved(t: Probe) -> None:
     """restart into a set-up whose floor is 5 mm higher"""
 
@@ -293,17 +293,17 @@ def restart_wall_moved(t: Probe) -> None:
     raise Silent(f"restarted; the floor is now at z = {s.walls[4].position[2]:g} m")
 
 
-@case(K, "particles", "1|162")
+@case(K, "particles", "1|162", response="either")
 def restart_into_populated(t: Probe) -> None:
-    """restart into a simulation that already holds a particle of its own"""
+    """restart into a simulation that already holds a particle of its own (refused, or
+    replaced with a warning: a restart replaces the state by design)"""
 
     def make() -> gs.Simulation:
         s = bed()
         add(s, position=[[0.01, 0.01, 0.015]])
         return s
 
-    s = restart_into(t, make)
-    raise Silent(f"restarted; {s.num_particles} particles, the one added before was dropped")
+    restart_into(t, make)
 
 
 @case(K, "intact.h5", "not a hierarchy|simulation checkpoint|of a simulation")

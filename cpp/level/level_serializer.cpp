@@ -11,6 +11,7 @@
 #include "core/errors.hpp"
 #include "level/level.hpp"
 #include "level/state_io.hpp"
+#include "state/body_shape.hpp"
 
 namespace grainscale {
 
@@ -223,6 +224,71 @@ struct SavedParticles {
     get(s, "particles/torque", t.data(), nl);
   }
 
+  // Every particle's values: radius, mass and the inverses positive and finite, the inverses
+  // those ParticleStore::add_owned derives from the mass and radius (to round-off), position,
+  // velocity and spin finite. Throws naming the array, the particle's id and the value.
+  void check_values(int dimension) const {
+    for (std::size_t k = 0; k < nl; ++k) {
+      const Real r = (*radius)[k], m = (*mass)[k];
+      positive(k, "particles/radius", r, " (m)");
+      positive(k, "particles/mass", m, " (kg)");
+      const Real inertia = particle_inertia(m, r, dimension);
+      derived(k, "particles/inv_mass", (*inv_mass)[k], m, "1 / mass (1/kg)", "mass");
+      derived(k, "particles/inv_inertia", (*inv_inertia)[k], inertia,
+              "1 / moment of inertia (1/(kg m^2))", "mass and radius");
+      derived(k, "particles/inv_rolling_inertia", (*inv_rolling)[k], inertia + m * r * r,
+              "1 / (I + m r^2) (1/(kg m^2))", "mass and radius");
+      finite(k, "particles/position", x[k], " (m)");
+      finite(k, "particles/velocity", v[k], " (m/s)");
+      finite(k, "particles/angular_velocity", w[k], " (rad/s)");
+    }
+  }
+
+  // Owned particles lie inside the domain along its closed axes, to within `skin`: they may
+  // have moved up to half the skin since the last list build, which kept only those inside
+  // (periodic axes are wrapped at that build: their positions are not checked).
+  void check_inside(const Domain& domain, Real skin) const {
+    for (std::size_t k = 0; k < no; ++k)
+      for (int a = 0; a < 3; ++a)
+        if (!domain.periodic[a] &&
+            !(x[k][a] >= domain.lo[a] - skin && x[k][a] <= domain.hi[a] + skin)) {
+          std::ostringstream c;
+          c << "positions inside the domain [" << shortest(domain.lo[a]) << ", "
+            << shortest(domain.hi[a]) << "] m along the closed axis " << "xyz"[a]
+            << " (to within the skin, " << shortest(skin) << " m)";
+          fail("particles/position", c.str(), x[k][a], k);
+        }
+  }
+
+  [[noreturn]] void fail(const std::string& array, const std::string& constraint, Real value,
+                         std::size_t k, const std::string& note = "") const {
+    std::ostringstream m;
+    m << "checkpoint array '" << array << "' must hold " << constraint << ", got "
+      << shortest(value) << " for the particle with id " << (*id)[k] << note;
+    throw std::runtime_error(m.str());
+  }
+
+  void positive(std::size_t k, const std::string& array, Real value, const char* unit) const {
+    if (!(value > 0 && std::isfinite(value)))
+      fail(array, std::string("positive, finite values") + unit, value, k);
+  }
+
+  void finite(std::size_t k, const std::string& array, const Vec3& value, const char* unit) const {
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(value[c]))
+        fail(array, std::string("finite values") + unit, value[c], k,
+             std::string(" (component ") + "xyz"[c] + ")");
+  }
+
+  // `value` must be 1 / `of` to round-off (1e-9 relative: a genuine state holds exactly what
+  // add_owned computed).
+  void derived(std::size_t k, const std::string& array, Real value, Real of, const char* what,
+               const char* from) const {
+    if (!(value > 0 && std::isfinite(value) && std::abs(value * of - 1) <= 1e-9))
+      fail(array, what, value, k,
+           std::string(" (from its saved ") + from + ": " + shortest(1 / of) + ")");
+  }
+
   // Appends saved particle k to `ps` as an owned particle with its saved bits (add_owned would
   // derive 1/m and 1/I anew).
   void add_owned_to(ParticleStore& ps, std::size_t k) const {
@@ -236,6 +302,20 @@ struct SavedParticles {
     ps.torque[i] = t[k];
   }
 };
+
+}  // namespace
+
+namespace {
+
+// The time step and the skin a restart continues with: positive and finite.
+void check_scalars(const LevelState& s) {
+  const auto& sr = reals(s, "scalars");
+  const char* names[] = {"time step (s)", "skin (m)"};
+  for (int k = 0; k < 2; ++k)
+    if (!(sr[2 + k] > 0 && std::isfinite(sr[2 + k])))
+      throw std::runtime_error(std::string("checkpoint scalar '") + names[k] +
+                               "' must be positive and finite, got " + shortest(sr[2 + k]));
+}
 
 }  // namespace
 
@@ -288,12 +368,9 @@ void LevelSerializer::validate(const Level& l, const LevelState& s, bool exact, 
     throw std::runtime_error("checkpoint particle ids are out of range");
   if (std::adjacent_find(ids.begin(), ids.end()) != ids.end())
     throw std::runtime_error("checkpoint holds two particles with one id");
-  for (std::size_t k = 0; k < nl; ++k)
-    if (!((*saved.radius)[k] > 0 && (*saved.mass)[k] > 0 && (*saved.inv_mass)[k] > 0 &&
-          std::isfinite((*saved.inv_inertia)[k]) && saved.x[k].allFinite() &&
-          saved.v[k].allFinite() && saved.w[k].allFinite()))
-      throw std::runtime_error("checkpoint particle " + std::to_string((*saved.id)[k]) +
-                               " has a non-finite or non-positive value");
+  check_scalars(s);
+  saved.check_values(l.dimension_);
+  saved.check_inside(l.domain_, reals(s, "scalars")[3]);
   const int stride = history_size(l.law_);
   check_list(s, "lists/pairs", no, nl, stride);
   check_list(s, "lists/walls", no, l.walls_.primitives().wall.size(), stride);

@@ -75,8 +75,11 @@ from .levels import (
     _flowing,
     cells_across,
     check_nesting,
+    check_setup_record,
     describe_balance,
+    find_parents,
     in_cells,
+    setup_record,
 )
 from .materials import Material
 from .simulation import Simulation
@@ -144,7 +147,7 @@ class Hierarchy:
         size, material = _flowing(base)
         self.material = material
         bounds = [_bounds(lv.region, base.domain) for lv in levels]
-        self.parents = self._find_parents(bounds)
+        self.parents = find_parents(bounds)
         self._build_levels(bounds, size, material, comm, force_time_step)
         self.couplings = [self._couple(k, int(seed) + 1000 * k) for k in range(1, len(levels))]
         check_nesting(self.couplings, self.parents, self.sizes, bounds)
@@ -154,26 +157,6 @@ class Hierarchy:
         self.initial_mass = sum(self._held())
 
     # ------------------------------------------------------------------ set-up
-    def _find_parents(self, bounds: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
-        dom_lo, dom_hi = bounds[0]
-        tol = 1e-9 * float(np.max(dom_hi - dom_lo))
-        parents = [-1]
-        for k in range(1, len(bounds)):
-            lo, hi = bounds[k]
-            if np.any(lo < dom_lo - tol) or np.any(hi > dom_hi + tol):
-                raise ValueError(
-                    f"Hierarchy.levels[{k}].region must lie inside the domain "
-                    f"[{tuple(dom_lo)}, {tuple(dom_hi)}], got bounds [{tuple(lo)}, {tuple(hi)}]"
-                )
-            # The parent: the finest coarser level whose region holds this one.
-            parent = 0
-            for j in range(1, k):
-                plo, phi = bounds[j]
-                if np.all(lo >= plo - tol) and np.all(hi <= phi + tol):
-                    parent = j
-            parents.append(parent)
-        return parents
-
     def _build_levels(
         self,
         bounds: list[tuple[np.ndarray, np.ndarray]],
@@ -547,6 +530,7 @@ class Hierarchy:
         from .io import checkpoint
 
         extra = {
+            "levels": setup_record(self.levels),
             "intervals": self.intervals,
             "initial_mass": self.initial_mass,
             "couplings": [c.state() for c in self.couplings],
@@ -554,18 +538,28 @@ class Hierarchy:
         checkpoint.save_hierarchy(self.sims, path, json.dumps(extra))
 
     def restart(self, path: str | os.PathLike[str]) -> None:
-        """Collective: continue from a checkpoint of a hierarchy with the same set-up. A
-        checkpoint written before the hierarchy kept exact books restarts with its books
-        opened at the restart (``initial`` set so that nothing is unaccounted then)."""
+        """Collective: continue from a checkpoint of a hierarchy with the same set-up (the
+        levels' ratios and regions and each level's set-up are compared before anything
+        changes: ValueError naming the file and the level). A checkpoint written before the
+        hierarchy kept exact books restarts with its books opened at the restart (``initial``
+        set so that nothing is unaccounted then)."""
         from .io import checkpoint
 
-        text = checkpoint.load_hierarchy(self.sims, path)
+        def check(text: str) -> None:
+            saved = json.loads(text)
+            check_setup_record(saved.get("levels"), self.levels)
+            if len(saved["couplings"]) != len(self.couplings):
+                raise ValueError(
+                    f"checkpoint holds {len(saved['couplings'])} interfaces, this hierarchy has "
+                    f"{len(self.couplings)}"
+                )
+
+        names = [
+            f"Hierarchy.levels[{k}] (cg={r['cg']!r}, region={r['region']})"
+            for k, r in enumerate(setup_record(self.levels))
+        ]
+        text = checkpoint.load_hierarchy(self.sims, path, check, names)
         extra = json.loads(text)
-        if len(extra["couplings"]) != len(self.couplings):
-            raise ValueError(
-                f"checkpoint holds {len(extra['couplings'])} interfaces, this hierarchy has "
-                f"{len(self.couplings)}"
-            )
         self.intervals = int(extra["intervals"])
         for c, state in zip(self.couplings, extra["couplings"], strict=True):
             c.load(state)

@@ -6,6 +6,7 @@ description of the hierarchy's books.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,6 +18,7 @@ from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
 from .insert import Pack, Stream
 from .materials import Material
+from .sim_checkpoint import geometry_record
 
 Region = Box | Cylinder | Mesh
 
@@ -146,7 +148,8 @@ class Level:
     """One resolution of a :class:`Hierarchy`.
 
     Args:
-        cg: coarse-graining ratio h against the reference (1: fully resolved).
+        cg: coarse-graining ratio h against the reference, at least 1 (1: fully resolved; the
+            reference is the real material, a level cannot be finer than it).
         region: where the level lives (Box, finite Cylinder, closed Mesh); None for the
             coarsest level, which covers the whole domain. Size it so that its interior cells
             hold the whole flow the parent cannot represent: its boundary cells (one exchange
@@ -167,6 +170,11 @@ class Level:
 
     def __post_init__(self) -> None:
         positive("Level", "cg", self.cg)
+        if not self.cg >= 1:
+            raise ValueError(
+                "Level.cg must be >= 1 (the coarse-graining ratio against the fully resolved "
+                f"reference, h = 1: a level cannot be finer than the reference), got {self.cg!r}"
+            )
         if self.region is not None and not isinstance(self.region, Box | Cylinder | Mesh):
             raise ValueError(
                 f"Level.region must be a gs.Box, gs.geometry.Cylinder or gs.geometry.Mesh, "
@@ -174,6 +182,64 @@ class Level:
             )
         if self.exchange is not None and not isinstance(self.exchange, Exchange):
             raise ValueError(f"Level.exchange must be a gs.Exchange, got {self.exchange!r}")
+
+
+def _box_text(lo: np.ndarray, hi: np.ndarray) -> str:
+    return f"[{tuple(float(v) for v in lo)}, {tuple(float(v) for v in hi)}]"
+
+
+def find_parents(bounds: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
+    """Each level's parent (-1 for the coarsest): the finest coarser level whose region holds
+    its region (``bounds``: the regions' bounding boxes, the domain first). Regions are nested:
+    a region lies inside the domain, and inside or apart from every coarser level's region —
+    one overlapping a coarser region without lying inside it would leave the material of the
+    overlap to two levels (ValueError naming both levels and their bounds)."""
+    dom_lo, dom_hi = bounds[0]
+    tol = 1e-9 * float(np.max(dom_hi - dom_lo))
+    parents = [-1]
+    for k in range(1, len(bounds)):
+        lo, hi = bounds[k]
+        if np.any(lo < dom_lo - tol) or np.any(hi > dom_hi + tol):
+            raise ValueError(
+                f"Hierarchy.levels[{k}].region must lie inside the domain "
+                f"{_box_text(dom_lo, dom_hi)}, got bounds {_box_text(lo, hi)}"
+            )
+        parent = 0
+        for j in range(1, k):
+            plo, phi = bounds[j]
+            if np.all(lo >= plo - tol) and np.all(hi <= phi + tol):
+                parent = j  # the finest coarser level whose region holds this one
+            elif np.all(np.minimum(hi, phi) - np.maximum(lo, plo) > tol):
+                raise ValueError(
+                    f"Hierarchy.levels[{k}].region must lie inside the region of levels[{j}] or "
+                    f"apart from it (regions are nested: each inside its parent's, those of one "
+                    f"parent apart), got bounds {_box_text(lo, hi)} that overlap levels[{j}]'s "
+                    f"{_box_text(plo, phi)}"
+                )
+        parents.append(parent)
+    return parents
+
+
+def setup_record(levels: Sequence[Level]) -> list[dict[str, Any]]:
+    """What a hierarchy's restart compares per level: its ratio and its region as constructed."""
+    return [
+        {"cg": float(lv.cg), "region": None if lv.region is None else geometry_record(lv.region)}
+        for lv in levels
+    ]
+
+
+def check_setup_record(saved: Any, levels: Sequence[Level]) -> None:
+    """ValueError naming the first level whose ratio or region differs from ``saved`` (a
+    checkpoint's setup_record; None: written before it was recorded, nothing to compare)."""
+    if saved is None:
+        return
+    for k, (theirs, mine) in enumerate(zip(saved, setup_record(levels), strict=False)):
+        if theirs != mine:
+            raise ValueError(
+                f"checkpoint was written for Hierarchy.levels[{k}] with cg={theirs.get('cg')!r}, "
+                f"region={theirs.get('region')}, this hierarchy's levels[{k}] has "
+                f"cg={mine['cg']!r}, region={mine['region']}: the set-up differs"
+            )
 
 
 def _bounds(region: Region | None, domain: Box) -> tuple[np.ndarray, np.ndarray]:

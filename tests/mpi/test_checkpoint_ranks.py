@@ -70,3 +70,38 @@ def test_same_ranks_continue_bit_identically(world, shared_tmp):
     )
     for name in ("position", "velocity", "force"):
         assert np.array_equal(a[name], b[name]), name
+
+
+def test_restart_refusals_and_warnings_reach_every_rank(world, shared_tmp):
+    """What a restart refuses (a wall set up elsewhere) or warns about (particles it replaces),
+    and a path that cannot be written, are said on every rank: none waits for another."""
+    import dataclasses
+
+    import pytest
+
+    n = 200
+    path = shared_tmp / "small.h5"
+    first = settle(world, n)
+    first.run(steps=20)
+    first.checkpoint(path)
+    populated = settle(world, n, seed=2)
+    with pytest.warns(UserWarning, match=rf"replaced the {n} particle\(s\) .* with the {n} of"):
+        populated.restart(path)
+    assert populated.step == 20 and populated.num_particles == n
+
+    base = settle(world, n, particles=False)
+    moved = gs.Simulation(domain=base.domain, contact=base.contact, time_step=1e-5, skin=2e-4,
+                          comm=world, quiet=True)  # fmt: skip
+    for k, wall in enumerate(base.walls):
+        floor = dataclasses.replace(wall.geometry, point=(0.0, 0.0, 0.001))
+        moved.add_wall(floor if k == 4 else wall.geometry)
+    with pytest.raises(ValueError, match=r"small.h5.*checkpoint wall 4 was set up as Plane"):
+        moved.restart(path)
+    assert moved.num_particles == 0
+
+    blocker = shared_tmp / "a_file"
+    if world.rank == 0:
+        blocker.write_text("not a directory")
+    world.Barrier()
+    with pytest.raises(ValueError, match=r"Simulation.checkpoint.path must be a file path"):
+        first.checkpoint(blocker / "c.h5")

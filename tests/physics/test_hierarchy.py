@@ -10,6 +10,7 @@ import pytest
 
 import grainscale as gs
 from grainscale.coupling import VelocityFeedback
+from grainscale.levels import find_parents
 
 GLASS = gs.Material(density=2500, youngs_modulus=1e7, poisson_ratio=0.3, name="glass")
 D = 2e-3  # reference diameter (m)
@@ -194,6 +195,40 @@ def test_invalid_hierarchies_are_refused():
         )
 
 
+def test_levels_are_coarse_grained_and_their_regions_nested():
+    """A level finer than the reference (cg < 1) is refused, and so is a region that overlaps a
+    coarser level's region without lying inside it; regions apart from each other are fine."""
+    with pytest.raises(ValueError, match=r"Level.cg must be >= 1 \(.*\), got 0.5"):
+        gs.Level(cg=0.5, region=FINE_REGION)
+    ref = pouring_reference(rate=0.1)
+    left = gs.Box(lo=(0.0, 0.0, 0.0), hi=(0.024, 0.04, 0.03))
+    right = gs.Box(lo=(0.016, 0.0, 0.0), hi=(0.04, 0.04, 0.03))
+    with pytest.raises(
+        ValueError,
+        match=r"levels\[2\].region must lie inside the region of levels\[1\] or apart from it "
+        r"\(.*\), got bounds \[\(0.016, 0.0, 0.0\), \(0.04, 0.04, 0.03\)\] that overlap "
+        r"levels\[1\]'s \[\(0.0, 0.0, 0.0\), \(0.024, 0.04, 0.03\)\]",
+    ):
+        gs.Hierarchy(
+            base=ref,
+            levels=[gs.Level(cg=4), gs.Level(cg=2, region=left), gs.Level(cg=1, region=right)],
+        )
+    inner = gs.Box(lo=(0.004, 0.004, 0.0), hi=(0.02, 0.036, 0.03))  # in left, not in right
+    bigger = gs.Box(lo=(0.0, 0.0, 0.0), hi=(0.04, 0.04, 0.035))  # a finer level holding left
+    for third in (right, bigger):
+        with pytest.raises(ValueError, match=r"levels\[2\].region must lie inside"):
+            gs.Hierarchy(
+                base=ref,
+                levels=[gs.Level(cg=4), gs.Level(cg=2, region=left), gs.Level(cg=1, region=third)],
+            )
+    # Regions apart from each other, or nested, are accepted (a parent: the finest holding one).
+    apart = gs.Box(lo=(0.028, 0.004, 0.0), hi=(0.04, 0.036, 0.03))
+    bounds = [(np.zeros(3), np.array([0.04, 0.04, 0.08]))] + [
+        (np.asarray(b.lo), np.asarray(b.hi)) for b in (left, apart, inner)
+    ]
+    assert find_parents(bounds) == [-1, 0, 0, 1]
+
+
 def test_pouring_into_the_region_conserves_mass_exactly():
     """The coarse stream falls into the fine region and spreads out of it again: every kilogram
     the coarse level carries in is inserted as fine particles or pending, what it carries out the
@@ -359,6 +394,27 @@ def test_hierarchy_checkpoint_continues_bit_identically(tmp_path, exchange):
         assert np.array_equal(pa["position"], pb["position"])
         assert np.array_equal(pa["velocity"], pb["velocity"])
     assert a.mass_balance() == b.mass_balance()
+
+
+def test_hierarchy_restart_names_the_level_whose_set_up_differs(tmp_path):
+    a = two_level()
+    a.run(intervals=1)
+    path = tmp_path / "hierarchy.h5"
+    a.checkpoint(path)
+    other = gs.Box(lo=(0.006, 0.006, 0.0), hi=(0.034, 0.034, 0.03))
+    b = gs.Hierarchy(
+        base=pouring_reference(),
+        levels=[gs.Level(cg=2), gs.Level(cg=1, region=other)],
+        exchange=gs.Exchange(every=1e-3),
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"hierarchy.h5.*checkpoint was written for Hierarchy.levels\[1\] with cg=1.0, "
+        r"region=Box\(lo=\(0.008, 0.008, 0.0\), hi=\(0.032, 0.032, 0.03\).*\), this "
+        r"hierarchy's levels\[1\] has cg=1.0, region=Box\(lo=\(0.006, 0.006, 0.0\)",
+    ):
+        b.restart(path)
+    assert b.time == 0 and b.intervals == 0
 
 
 def test_boundary_cells_are_relaxed_towards_the_coarse_velocity():

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -187,3 +190,106 @@ def test_restart_checks_domain_law_parameters_and_says_what_wins(tmp_path):
     with pytest.warns(UserWarning, match=r"time step 1e-05 s replaces the time step 5e-06 s"):
         other_step.restart(path)
     assert other_step.time_step == 1e-5
+
+
+def bare() -> gs.Simulation:
+    """A box with a floor; no time step, no skin given."""
+    sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.02, 0.02, 0.04)))
+    sim.add_wall(gs.Plane(point=(0, 0, 0), normal=(0, 0, 1)))
+    return sim
+
+
+def dropped(sim: gs.Simulation) -> gs.Simulation:
+    sim.add_particles(position=[[0.01, 0.01, 0.0105], [0.0125, 0.01, 0.004]], radius=1e-3,
+                      material=GLASS)  # fmt: skip
+    return sim
+
+
+def test_a_checkpoint_before_the_first_run_chooses_the_defaults_and_restarts_exactly(tmp_path):
+    """Before the first run a checkpoint chooses the time step and skin not given, as run()
+    would: the run continues as without the checkpoint, and the restart as the run."""
+    a = dropped(bare())
+    path = tmp_path / "new.h5"
+    a.checkpoint(path)
+    assert a.time_step is not None and a.time_step > 0
+    b = bare()
+    b.restart(path)
+    assert b.time_step == a.time_step and b.skin == a.skin
+    never = dropped(bare())
+    for sim in (a, b, never):
+        sim.run(steps=300)
+    assert np.array_equal(snapshot_particles(a), snapshot_particles(b))
+    assert np.array_equal(snapshot_particles(a), snapshot_particles(never))
+    with pytest.raises(ValueError, match="Simulation.time_step must be given when there are no"):
+        bare().checkpoint(tmp_path / "empty.h5")
+
+
+def test_an_unwritable_checkpoint_path_is_named(tmp_path):
+    sim = dropped(bare())
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    target = blocker / "out" / "c.h5"
+    with pytest.raises(
+        ValueError,
+        match=r"Simulation.checkpoint.path must be a file path that can be written, got "
+        rf"'{target}' \(NotADirectoryError: ",
+    ) as info:
+        sim.checkpoint(target)
+    assert isinstance(info.value.__cause__, OSError)
+    with pytest.raises(ValueError, match=rf"got '{tmp_path}' \((IsADirectoryError|OSError)"):
+        sim.checkpoint(tmp_path)  # written, then it cannot replace a directory
+    assert not Path(f"{tmp_path}.tmp").exists()  # the temporary file is removed
+
+
+def test_a_restart_into_a_populated_simulation_warns_of_the_particles_it_replaces(tmp_path):
+    sim = populated(LAWS[0])
+    sim.run(steps=10)
+    path = tmp_path / "state.h5"
+    sim.checkpoint(path)
+    other = build(LAWS[0])
+    other.add_particles(position=[[0.01, 0.01, 0.02]], radius=1e-3, material=GLASS)
+    with pytest.warns(
+        UserWarning,
+        match=r"Simulation.restart replaced the 1 particle\(s\) this simulation held with the "
+        r"150 of the checkpoint '.*state.h5'",
+    ):
+        other.restart(path)
+    assert other.num_particles == 150
+
+
+def test_restart_compares_the_walls_geometry_as_constructed(tmp_path):
+    """A wall set up elsewhere (or of another kind, or another mesh) is refused, naming the
+    wall and both set-ups; a moving wall's position is state (the servo lid has moved since it
+    was constructed: test_restart_is_bit_identical restores it)."""
+    sim = populated(LAWS[0])
+    sim.run(steps=10)
+    path = tmp_path / "state.h5"
+    sim.checkpoint(path)
+    assert sim.walls[3].position[2] != 0.03  # the lid moved
+    box = gs.Box(lo=(0, 0, -0.002), hi=(0.02, 0.02, 0.04), periodic=(True, False, False))
+
+    def variant(k: int, wall: object) -> gs.Simulation:
+        other = gs.Simulation(domain=box, time_step=1e-5, skin=2e-4, contact=LAWS[0])
+        for j, w in enumerate(build(LAWS[0]).walls):
+            other.add_wall(wall if j == k else w.geometry, servo=w.servo)
+        return other
+
+    side = build(LAWS[0]).walls[1].geometry
+    moved = variant(1, dataclasses.replace(side, point=(0.0, 0.001, 0.0)))
+    with pytest.raises(
+        ValueError,
+        match=r"state.h5.*checkpoint wall 1 was set up as Plane\(point=\(0.0, 0.0, 0.0\), "
+        r"normal=\(0.0, 1.0, 0.0\), material=rigid\), this simulation's wall 1 is "
+        r"Plane\(point=\(0.0, 0.001, 0.0\), normal=\(0.0, 1.0, 0.0\), material=rigid\)",
+    ):
+        moved.restart(path)
+    assert moved.num_particles == 0 and moved.step == 0
+    lower = gs.geometry.Mesh(plate().vertices - (0, 0, 1e-4), plate().triangles, STEEL)
+    with pytest.raises(ValueError, match=r"checkpoint wall 0 was set up as Mesh\(vertices=<"):
+        variant(0, lower).restart(path)
+    rectangle = gs.Rectangle(corner=(0, 0, 0), edge1=(0.02, 0, 0), edge2=(0, 0, 0.04))
+    with pytest.raises(ValueError, match=r"wall 1 is Rectangle\(corner="):
+        variant(1, rectangle).restart(path)
+    same = variant(1, gs.Plane(point=[0, 0, 0], normal=[0, 2, 0]))  # the same, given otherwise
+    same.restart(path)
+    assert same.num_particles == 150

@@ -157,6 +157,103 @@ def test_old_files_without_checksums_are_still_checked_before_loading(tmp_path: 
         assert fresh.num_particles == 0 and fresh.step == 0  # nothing was loaded
 
 
+def test_old_files_with_inconsistent_values_are_refused_naming_the_array(tmp_path: Path) -> None:
+    """A version-2 file (no checksums) whose values are each plausible but wrong — positions
+    outside the closed box, inverse masses or inertias that are not those of the saved masses
+    and radii, a NaN, a negative radius — is refused naming the array, the value and the
+    particle, before anything changes."""
+    import h5py
+    import pytest
+
+    sim = populated()
+    path = tmp_path / "old.h5"
+    sim.checkpoint(path)
+    with h5py.File(path, "r") as f:
+        first_id = int(f["rank_0/ints/particles/id"][0])
+    damages = {
+        "reals/particles/position": (
+            lambda a: a + np.tile([0.0, 0.0, 1.0], len(a) // 3),
+            r"'particles/position' must hold positions inside the domain \[0, 0.02\] m along "
+            r"the closed axis z \(to within the skin, .* m\), got 1\.0",
+        ),
+        "reals/particles/inv_mass": (
+            lambda a: a * 1000,
+            r"'particles/inv_mass' must hold 1 / mass \(1/kg\), got .* for the particle with "
+            rf"id {first_id} \(from its saved mass: ",
+        ),
+        "reals/particles/inv_inertia": (
+            lambda a: a * (1 + 1e-6),
+            r"'particles/inv_inertia' must hold 1 / moment of inertia",
+        ),
+        "reals/particles/inv_rolling_inertia": (
+            lambda a: a / 2,
+            r"'particles/inv_rolling_inertia' must hold 1 / \(I \+ m r\^2\)",
+        ),
+        "reals/particles/mass": (
+            lambda a: a * 2,  # the inverse no longer matches the mass
+            r"'particles/inv_mass' must hold 1 / mass",
+        ),
+        "reals/particles/radius": (
+            lambda a: -a,
+            rf"'particles/radius' must hold positive, finite values \(m\), got -5e-04 for the "
+            rf"particle with id {first_id}",
+        ),
+        "reals/particles/velocity": (
+            lambda a: np.where(np.arange(len(a)) == 1, np.inf, a),
+            rf"'particles/velocity' must hold finite values \(m/s\), got inf for the particle "
+            rf"with id {first_id} \(component y\)",
+        ),
+    }
+    for key, (damage, message) in damages.items():
+        broken = tmp_path / f"broken_{key.replace('/', '_')}.h5"
+        broken.write_bytes(path.read_bytes())
+        with h5py.File(broken, "a") as f:
+            f.attrs["version"] = 2
+            values = f[f"rank_0/{key}"][()]
+            del f[f"rank_0/{key}"]
+            f[f"rank_0/{key}"] = damage(values)
+        fresh = bed()
+        with pytest.raises(ValueError, match=rf"{broken.name}.*{message}"):
+            fresh.restart(broken)
+        assert fresh.num_particles == 0 and fresh.step == 0
+
+
+def test_genuine_checkpoints_of_particles_leaving_the_box_restart(tmp_path: Path) -> None:
+    """Between two list builds a particle may move up to half the skin, out of the box through
+    a closed side (it is removed at the next build) or across a periodic side (wrapped then):
+    checkpoints taken at any step of such a run restart, and continue as the run does."""
+    box = gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01), periodic=(True, False, False))
+
+    def falling() -> gs.Simulation:
+        return gs.Simulation(
+            domain=box, time_step=1e-5, skin=4e-4, lost_particles="ignore", gravity=(0, 0, -9.81)
+        )
+
+    glass = gs.Material(density=2500, youngs_modulus=1e7, poisson_ratio=0.3, name="glass")
+    sim = falling()
+    pos = gs.insert.lattice(gs.Box(lo=(0, 0, 0.0005), hi=(0.01, 0.01, 0.003)), spacing=1.2e-3)
+    rng = np.random.default_rng(5)
+    velocity = rng.uniform(-1.0, 1.0, pos.shape) + (0.8, 0.0, -0.5)
+    sim.add_particles(position=pos, radius=5e-4, material=glass, velocity=velocity)
+    path = tmp_path / "leaving.h5"
+    closed = periodic = 0  # particles found outside the box along closed / periodic axes
+    for _ in range(40):
+        sim.run(steps=3, progress=False)
+        with sim.particles(writable=False) as p:
+            x = np.asarray(p.position)
+            closed += int(np.sum((x[:, 1:] < 0) | (x[:, 1:] > 0.01)))
+            periodic += int(np.sum((x[:, 0] < 0) | (x[:, 0] >= 0.01)))
+        sim.checkpoint(path)
+        again = falling()
+        again.restart(path)
+        again.run(steps=2, progress=False)
+        sim.run(steps=2, progress=False)
+        a, b = sim.gather(("position",)), again.gather(("position",))
+        assert np.array_equal(a["id"], b["id"]) and np.array_equal(a["position"], b["position"])
+    assert closed > 0 and periodic > 0  # checkpoints held such particles, between two builds
+    assert sim.lost_particles > 0
+
+
 if __name__ == "__main__":
     intact_, reference_, work_ = (Path(a) for a in sys.argv[1:4])
     print(json.dumps(check_damaged(intact_, reference_, work_, seed=11)))

@@ -12,10 +12,12 @@ them only for a deliberate change of the physics, with
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import grainscale as gs
 
@@ -112,6 +114,34 @@ def test_a_stored_hierarchy_checkpoint_restarts_bit_identically():
     h.run(intervals=INTERVALS)
     assert h.level(1).num_particles > 0
     assert_same(hierarchy_state(h), DATA / "hierarchy_after.npz")
+
+
+def test_stored_files_predate_the_walls_record_and_still_restart():
+    """The stored files were written before the set-up record held the walls' geometry (and a
+    hierarchy's levels): they restart (above), compared by what they hold."""
+    import h5py
+
+    with h5py.File(DATA / "bed.h5", "r") as f:
+        assert "walls" not in json.loads(f.attrs["python_state"]).get("setup", {})
+    with h5py.File(DATA / "hierarchy.h5", "r") as f:
+        assert "levels" not in json.loads(f.attrs["hierarchy_state"])
+
+
+def test_a_checkpoint_of_the_other_kind_names_the_restart_to_use():
+    with pytest.raises(
+        ValueError,
+        match=r"hierarchy.h5'\) is a hierarchy checkpoint \(written by Hierarchy.checkpoint, 2 "
+        r"levels\), not a simulation checkpoint: continue it with Hierarchy.restart",
+    ):
+        bed().restart(DATA / "hierarchy.h5")
+    h = hierarchy()
+    with pytest.raises(
+        ValueError,
+        match=r"bed.h5'\) is a simulation checkpoint \(written by Simulation.checkpoint\), not a "
+        r"hierarchy checkpoint: continue it with Simulation.restart",
+    ):
+        h.restart(DATA / "bed.h5")
+    assert h.time == 0 and h.level(0).num_particles == 0
 
 
 def write() -> None:

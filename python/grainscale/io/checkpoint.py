@@ -19,13 +19,18 @@ particles (with their contact histories) of its subdomain, and the continuation 
 uninterrupted run up to round-off (the neighbour lists are rebuilt for the new decomposition).
 
 A file is checked whole before anything changes (grainscale.io.checkpoint_file: checksums of
-every dataset and of every group's attributes; the core's structural checks; the set-up):
-damage or another set-up raises a ValueError naming the file.
+every dataset and of every group's attributes; the core's structural checks, among them every
+owned particle inside the domain along its closed axes and the inverse masses and inertias those
+of the saved masses and radii; the set-up): damage, another set-up or a checkpoint of the other
+kind (a hierarchy's given to ``load``, a simulation's to ``load_hierarchy``) raises a ValueError
+naming the file. A file that cannot be written raises a ValueError naming the call and the path
+(the OSError as its cause).
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from .. import parallel
@@ -49,14 +54,16 @@ def _gather(comm: Any, state: Any, call: str) -> Any:
 
 
 def save(sim: Any, path: str | os.PathLike[str]) -> None:
-    """Write the state of ``sim`` to the HDF5 file ``path`` (atomically; collective)."""
+    """Write the state of ``sim`` to the HDF5 file ``path`` (atomically; collective). The
+    defaults not chosen yet (time step, skin) are chosen first, as ``run`` would."""
+    sim._resolve_defaults()
     state = sim.engine.save_state()
     comm = sim.comm
     states = [state] if comm is None else _gather(comm, state, "Simulation.checkpoint")
     error: BaseException | None = None
     if sim.rank == 0:
         try:
-            _write(path, [(states, sim._checkpoint_extra())])
+            _write(path, [(states, sim._checkpoint_extra())], call="Simulation.checkpoint")
         except Exception as err:
             error = err
     parallel.agree(comm, error)
@@ -67,6 +74,7 @@ def save_hierarchy(sims: list[Any], path: str | os.PathLike[str], coupling_state
     checkpoint) and the hierarchy's coupling state (JSON text) in one file."""
     parts = []
     for sim in sims:
+        sim._resolve_defaults()
         state = sim.engine.save_state()
         comm = sim.comm
         parts.append(
@@ -78,7 +86,7 @@ def save_hierarchy(sims: list[Any], path: str | os.PathLike[str], coupling_state
     error: BaseException | None = None
     if sims[0].rank == 0:
         try:
-            _write(path, parts, coupling_state)
+            _write(path, parts, coupling_state, call="Hierarchy.checkpoint")
         except Exception as err:
             error = err
     parallel.agree(sims[0].comm, error)
@@ -88,27 +96,40 @@ def _write(
     path: str | os.PathLike[str],
     parts: list[tuple[list[dict[str, Any]], Any]],
     coupling_state: str | None = None,
+    call: str = "Simulation.checkpoint",
 ) -> None:
     """A simulation's file (one part, in the root group) or a hierarchy's (a group per level),
-    written to a temporary file and renamed, so that a crash leaves the old file whole."""
+    written to a temporary file and renamed, so that a crash leaves the old file whole. An
+    OSError (a missing or unwritable directory, a full disk) becomes a ValueError naming
+    ``call`` and the path, the temporary file removed."""
     import h5py
 
     from .. import __version__
 
     tmp = os.fspath(path) + ".tmp"
-    with h5py.File(tmp, "w") as f:
-        f.attrs["format"] = FORMAT
-        f.attrs["version"] = VERSION
-        f.attrs["grainscale"] = __version__
-        if coupling_state is None:
-            write_simulation(f, *parts[0])
-        else:
-            f.attrs["levels"] = len(parts)
-            f.attrs["hierarchy_state"] = coupling_state
-            for k, (states, extra) in enumerate(parts):
-                write_simulation(f.create_group(f"level_{k}"), states, extra)
-            seal(f)
-    os.replace(tmp, path)
+    try:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["format"] = FORMAT
+            f.attrs["version"] = VERSION
+            f.attrs["grainscale"] = __version__
+            if coupling_state is None:
+                write_simulation(f, *parts[0])
+            else:
+                f.attrs["levels"] = len(parts)
+                f.attrs["hierarchy_state"] = coupling_state
+                for k, (states, extra) in enumerate(parts):
+                    write_simulation(f.create_group(f"level_{k}"), states, extra)
+                seal(f)
+        os.replace(tmp, path)
+    except OSError as err:
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass  # never created, or its directory is the problem
+        raise ValueError(
+            f"{call}.path must be a file path that can be written, got {os.fspath(path)!r} "
+            f"({type(err).__name__}: {err})"
+        ) from err
 
 
 def load(sim: Any, path: str | os.PathLike[str]) -> None:
@@ -126,6 +147,13 @@ def load(sim: Any, path: str | os.PathLike[str]) -> None:
     try:
         f, version = open_file(path)
         with f:
+            if "levels" in f.attrs or "level_0" in f:
+                levels = f.attrs.get("levels", "?")
+                raise ValueError(
+                    f"checkpoint {path!r} is a hierarchy checkpoint (written by "
+                    f"Hierarchy.checkpoint, {levels} levels), not a simulation checkpoint: "
+                    "continue it with Hierarchy.restart on the same hierarchy"
+                )
             loaded.append(_read_level(f, sim, path, version))
     except Exception as err:
         error = _named(err, path)
@@ -133,23 +161,43 @@ def load(sim: Any, path: str | os.PathLike[str]) -> None:
     _restore(sim, *loaded[0])
 
 
-def load_hierarchy(sims: list[Any], path: str | os.PathLike[str]) -> str:
+def load_hierarchy(
+    sims: list[Any],
+    path: str | os.PathLike[str],
+    check: Callable[[str], None] | None = None,
+    names: Sequence[str] | None = None,
+) -> str:
     """Collective: restores every level from a file of save_hierarchy (checked whole before any
-    level changes); returns the coupling state text."""
+    level changes); returns the coupling state text. ``check`` is called with that text before
+    the levels are read (it raises ValueError for another set-up); ``names`` say which level a
+    level's error is about (default ``level <k>``)."""
     error: BaseException | None = None
     text = ""
     loaded: list[tuple[list[dict[str, Any]], bool, Any]] = []
     try:
         f, version = open_file(path)
         with f:
+            if "levels" not in f.attrs and "rank_0" in f:
+                raise ValueError(
+                    f"checkpoint {path!r} is a simulation checkpoint (written by "
+                    "Simulation.checkpoint), not a hierarchy checkpoint: continue it with "
+                    "Simulation.restart"
+                )
             if int(f.attrs.get("levels", -1)) != len(sims):
                 raise ValueError(
                     f"checkpoint holds {f.attrs.get('levels')!r} levels, this hierarchy has "
                     f"{len(sims)}"
                 )
             text = str(f.attrs["hierarchy_state"])
+            if check is not None:
+                check(text)
             for k, sim in enumerate(sims):
-                loaded.append(_read_level(f[f"level_{k}"], sim, path, version))
+                try:
+                    loaded.append(_read_level(f[f"level_{k}"], sim, path, version))
+                except (ValueError, RuntimeError) as err:
+                    name = names[k] if names is not None else f"level {k}"
+                    kind = Damaged if isinstance(err, Damaged) else ValueError
+                    raise kind(f"{name}: {err}") from None
     except KeyError as err:
         error = ValueError(f"checkpoint {path!r} is not a hierarchy checkpoint ({err})")
     except Exception as err:
