@@ -35,11 +35,23 @@ class OutputMethods:
     _outputs: list[tuple[Output, int]]
     _log_path: Path | None
     _run_clock: tuple[float, int, int] | None
-    comm: Any
-    rank: int
-    ranks: int
-    step: int
-    time: float
+
+    if TYPE_CHECKING:  # Simulation's properties
+
+        @property
+        def comm(self) -> Any: ...
+
+        @property
+        def rank(self) -> int: ...
+
+        @property
+        def ranks(self) -> int: ...
+
+        @property
+        def step(self) -> int: ...
+
+        @property
+        def time(self) -> float: ...
 
     def output(self, writer: Output) -> None:
         """Register an output operation, called during run(): ``grainscale.io.VTK`` (particle
