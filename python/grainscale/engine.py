@@ -116,6 +116,13 @@ class Engine:
     def clear_lost_log(self) -> None:
         self.core.clear_lost_log()
 
+    # ------------------------------------------------------------------------ outputs
+    def evaluate_forces(self) -> None:
+        """Collective: completes a pending list build and set-up force evaluation (as the first
+        step of the next run would, with the same result: nothing else changes), recording the
+        contacts when ``record_contacts`` is on; nothing when the forces are current."""
+        self.core.run(0, True)
+
     # ------------------------------------------------------------------- diagnostics
     def diagnostics(self) -> dict[str, float]:
         """This rank's counters (tests and benchmarks): ``rebuilds`` (neighbour-list builds),

@@ -12,7 +12,7 @@ import sys
 import time as _time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -27,20 +27,15 @@ from .materials import Material
 from .particle_view import WRITABLE_FIELDS, ParticleView
 from .placement import check_new_particles
 from .sim_checkpoint import CheckpointMethods
+from .sim_output import Output, OutputMethods
 from .sim_ranks import RankMethods
 from .sim_thermo import ThermoMethods
 from .sim_walls import WallHandle, WallMethods
 
 
-class Output(Protocol):
-    """What Simulation.output() accepts (e.g. grainscale.io.VTK)."""
-
-    def next_step(self, step: int, time: float, time_step: float) -> int: ...
-
-    def write(self, sim: Simulation) -> Any: ...
-
-
-class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, ThermoMethods):
+class Simulation(
+    WallMethods, RankMethods, CheckpointMethods, GuardMethods, ThermoMethods, OutputMethods
+):
     """A DEM simulation of spheres in a box, with walls and one contact law.
 
     Args:
@@ -164,6 +159,8 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         self._level.record_contacts = bool(record_contacts)
         self.thermo_log: list[dict[str, float]] = []
         self._outputs: list[tuple[Output, int]] = []
+        self._log_path = None  # the log file (sim.log)
+        self._run_clock = None  # (wall-clock start, first step, target) of the current run
         self._walls: list[WallHandle] = []
         self._wall_spin: dict[int, tuple[float, float, float]] = {}
         self._wall_servos: dict[int, Servo] = {}
@@ -307,12 +304,6 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
             pos, rows(velocity, "velocity"), rows(angular_velocity, "angular_velocity"), rad, mat
         )
         return np.arange(first, first + n, dtype=np.int64)
-
-    def output(self, writer: Output) -> None:
-        """Register an output operation (e.g. ``grainscale.io.VTK``), called during run()."""
-        if not hasattr(writer, "next_step") or not hasattr(writer, "write"):
-            raise ValueError(f"Simulation.output needs an output operation, got {writer!r}")
-        self._outputs.append((writer, -1))
 
     # ----------------------------------------------------------------- insertion and outlets
     def insert(self, operation: Pack | Stream) -> Any:
@@ -529,6 +520,11 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
 
             bar = tqdm(total=target - self.step, unit="step", leave=False)
         self._rate_clock = (_time.perf_counter(), self.step)
+        with self._logged_run(target):
+            self._run_to(target, dt, bar)
+
+    def _run_to(self, target: int, dt: float, bar: Any) -> None:
+        """The run loop: chunks of steps in C++, outputs and thermo lines between them."""
         self._python_step(lambda: self._start_outputs(dt))
         try:
             while self.step < target:
@@ -554,7 +550,7 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
             if bar is not None:
                 bar.close()
         if not self.thermo_log or self.thermo_log[-1]["step"] != self.step:
-            self._log_thermo(print_line=False)
+            self._log_thermo(print_line=False, log_line=False)
 
     def _target_step(self, steps: int | None, until: float | None, dt: float) -> int:
         """The step a run of ``steps`` steps or up to time ``until`` ends at."""
@@ -591,16 +587,3 @@ class Simulation(WallMethods, RankMethods, CheckpointMethods, GuardMethods, Ther
         except Exception as err:
             error = err
         parallel.agree(self._comm, error)
-
-    def _start_outputs(self, dt: float) -> None:
-        self._outputs = [(w, w.next_step(self.step, self.time, dt)) for w, _ in self._outputs]
-        self._write_due_outputs(dt)
-
-    def _write_due_outputs(self, dt: float) -> None:
-        updated = []
-        for writer, due in self._outputs:
-            if due == self.step:
-                writer.write(self)
-                due = writer.next_step(self.step + 1, self.time + dt, dt)
-            updated.append((writer, due))
-        self._outputs = updated

@@ -5,10 +5,13 @@ Low-level writers (pure numpy):
 * :func:`write_vtp` - points with point data, one vertex cell per point (Verts), so ParaView
   renders them directly (use a Glyph filter scaled by ``radius`` for spheres).
 * :func:`write_vtp_mesh` - a triangle surface (Polys) with optional cell / point data.
+* :func:`write_vtp_lines` - line segments (Lines) with optional cell / point data (the contact
+  network: grainscale.io.contact_network).
 * :class:`PVDSeries` - the .pvd "Collection" index that ParaView opens as one time series.
 * :func:`write_pvtp` - the parallel index (.pvtp) of per-rank pieces of one snapshot.
 
-The output operation used by ``Simulation.output()`` is :class:`VTK`.
+The output operation used by ``Simulation.output()`` is :class:`VTK`
+(grainscale.io.vtk_output).
 
 Files follow the VTK XML format (version 1.0, ``byte_order="LittleEndian"``,
 ``header_type="UInt64"``). Data arrays are written in one of three encodings:
@@ -27,15 +30,14 @@ from __future__ import annotations
 
 import base64
 import math
-import numbers
 import os
+import warnings
+import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from .wall_surfaces import wall_surfaces
 
 _ATTRIBUTE_ESCAPES = str.maketrans(
     {
@@ -57,7 +59,17 @@ def _quoteattr(value: str) -> str:
     return '"' + value.translate(_ATTRIBUTE_ESCAPES) + '"'
 
 
-__all__ = ["VTK", "PVDSeries", "write_pvtp", "write_vtp", "write_vtp_mesh"]
+__all__ = ["PVDSeries", "write_pvtp", "write_vtp", "write_vtp_lines", "write_vtp_mesh"]
+
+
+def __getattr__(name: str) -> Any:
+    """``VTK`` lives in grainscale.io.vtk_output (which imports this module's writers)."""
+    if name == "VTK":
+        from .vtk_output import VTK
+
+        return VTK
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 PathLike = str | os.PathLike
 
@@ -291,8 +303,44 @@ def write_vtp_mesh(
     )
 
 
+def write_vtp_lines(
+    path: PathLike,
+    points: Any,
+    segments: Any,
+    cell_data: Mapping[str, Any] | None = None,
+    point_data: Mapping[str, Any] | None = None,
+    binary: bool = True,
+    appended: bool = False,
+) -> None:
+    """Write line segments as VTK XML PolyData (two-point cells in the ``Lines`` section).
+
+    Args:
+        path: output file, conventionally ``*.vtp``.
+        points: (V, 3) end points, m.
+        segments: (L, 2) integer point indices (0-based, each in [0, V)).
+        cell_data: name -> (L,) or (L, k) array, one value per segment (e.g. force, N).
+        point_data: name -> (V,) or (V, k) array, one value per point.
+        binary, appended: encoding, as in :func:`write_vtp`.
+    """
+    seg = np.asarray(segments)
+    if seg.ndim != 2 or seg.shape[1] != 2 or (seg.size and seg.dtype.kind not in "iu"):
+        raise ValueError(f"segments must be an integer array of shape (L, 2), got {seg.shape}")
+    n_points = np.shape(points)[0] if np.ndim(points) >= 1 else 0
+    seg = seg.astype(np.int64)
+    if seg.size and (seg.min() < 0 or seg.max() >= n_points):
+        raise ValueError(f"segment point indices must be in [0, {n_points})")
+    offsets = np.arange(1, seg.shape[0] + 1, dtype=np.int64) * 2
+    _write_polydata(
+        path, points, "Lines", seg.reshape(-1), offsets, point_data, cell_data, binary, appended
+    )
+
+
 def write_pvtp(
-    path: PathLike, pieces: list[str], point_data: Mapping[str, Any], points_dtype: Any = np.float64
+    path: PathLike,
+    pieces: list[str],
+    point_data: Mapping[str, Any],
+    points_dtype: Any = np.float64,
+    cell_data: Mapping[str, Any] | None = None,
 ) -> None:
     """Write the parallel index (PPolyData) of a snapshot written as one .vtp piece per rank.
 
@@ -302,6 +350,7 @@ def write_pvtp(
         point_data: name -> an array (or an empty array) with the dtype and number of components
             of that point-data array in the pieces.
         points_dtype: dtype of the pieces' points.
+        cell_data: name -> an array describing a cell-data array of the pieces, as point_data.
     """
 
     def describe(name: str | None, values: Any) -> str:
@@ -318,7 +367,12 @@ def write_pvtp(
         "    <PPointData>\n",
     ]
     lines += [describe(name, values) for name, values in point_data.items()]
-    lines += ["    </PPointData>\n", "    <PPoints>\n"]
+    lines.append("    </PPointData>\n")
+    if cell_data:
+        lines.append("    <PCellData>\n")
+        lines += [describe(name, values) for name, values in cell_data.items()]
+        lines.append("    </PCellData>\n")
+    lines.append("    <PPoints>\n")
     lines.append(describe(None, np.zeros((0, 3), dtype=points_dtype)))
     lines.append("    </PPoints>\n")
     lines += [f"    <Piece Source={_quoteattr(Path(p).as_posix())}/>\n" for p in pieces]
@@ -330,13 +384,44 @@ class PVDSeries:
     """A ParaView ``.pvd`` collection: a list of (time, file, part) data sets.
 
     The index is rewritten (atomically) after every :meth:`add`, so an interrupted run still
-    leaves a valid file that ParaView opens as a time series.
+    leaves a valid file that ParaView opens as a time series. :meth:`resume` continues the
+    series an earlier run left in the file (a restarted run appends to it).
     """
 
     def __init__(self, path: PathLike) -> None:
         """``path``: the .pvd file; data set file names are given relative to its directory."""
         self.path = Path(path)
         self.entries: list[tuple[float, str, int]] = []
+
+    def resume(self, before: float) -> None:
+        """Continue the series already in the file: keep its entries whose time is earlier than
+        ``before`` (s) and whose data set file still exists; the entries added next follow
+        them. Without a file nothing is kept; an unreadable one is replaced (with a warning).
+
+        A run restarted at time t that writes into the directory of the run it continues thus
+        lists the earlier run's snapshots before t, then its own; a run starting at t = 0 starts
+        a new series.
+        """
+        before = float(before)
+        self.entries = []
+        if not self.path.is_file():
+            return
+        try:
+            root = ET.parse(self.path).getroot()
+            kept = []
+            for ds in root.iter("DataSet"):
+                time, file = float(ds.get("timestep", "nan")), str(ds.get("file"))
+                if time < before and (self.path.parent / file).is_file():
+                    kept.append((time, Path(file).as_posix(), int(ds.get("part", "0"))))
+        except (ET.ParseError, ValueError, OSError) as err:
+            warnings.warn(
+                f"PVDSeries: {os.fspath(self.path)!r} is not a readable .pvd index ({err}); "
+                "it is replaced by a new series",
+                UserWarning,
+                stacklevel=2,
+            )
+            return
+        self.entries = sorted(kept, key=lambda e: e[0])
 
     def add(self, time: float, relative_file: str, part: int = 0) -> None:
         """Add a data set at ``time`` (s) and rewrite the index.
@@ -365,196 +450,3 @@ class PVDSeries:
         lines += ["  </Collection>\n", "</VTKFile>\n"]
         self.path.parent.mkdir(parents=True, exist_ok=True)
         _atomic_write(self.path, ["".join(lines).encode("utf-8")])
-
-
-# --------------------------------------------------------------------------------------------
-# Simulation output operation
-# --------------------------------------------------------------------------------------------
-
-
-class VTK:
-    """Particle snapshots for ParaView: ``<directory>/<prefix>_<step:08d>.vtp`` + ``<prefix>.pvd``.
-
-    Register with ``sim.output(gs.io.VTK("out/", every=0.01))``. Each snapshot holds, per
-    particle: position (points, m), ``radius`` (m), ``velocity`` (m/s), ``angular_velocity``
-    (rad/s), ``force`` (N), ``torque`` (N m, when available), ``id`` (int64), ``material``
-    (int32) and ``mass`` (kg). In ParaView open the .pvd and apply Glyph (Sphere, scale by
-    ``radius``, scale factor 2) to see the grains.
-
-    ``level``: the level of a :class:`~grainscale.Hierarchy` the simulation is (written as an
-    int32 ``level`` array, to colour the levels in ParaView).
-
-    Under MPI every rank writes its particles as ``<prefix>_<step:08d>_r<rank>.vtp`` (with a
-    ``rank`` array) and rank 0 writes the parallel index ``<prefix>_<step:08d>.pvtp``, which
-    the .pvd lists. Rank 0 writes the walls, every type where it is at the snapshot (planes
-    clipped to the domain, rectangles, cylinders, meshes; grainscale.io.wall_surfaces), as
-    ``<prefix>_walls_<step:08d>.vtp`` with a cell array ``wall`` (the wall's index), listed in
-    ``<prefix>_walls.pvd``; once if no wall moves, else at every snapshot.
-
-    Schedule (exactly one of):
-
-    * ``every``: simulated-time interval, s. Snapshots at the first step whose time reaches each
-      multiple of ``every`` (t = 0, every, 2 every, ...).
-    * ``every_steps``: step interval. Snapshots at the steps that are multiples of
-      ``every_steps``.
-
-    In both cases the first scheduled call writes at once (the step when the writer is attached).
-
-    Protocol used by the Simulation: ``next_step(step, time, time_step)`` returns the next step
-    at which to call ``write(sim)``; call it again after each write and whenever the time step
-    changes (it depends only on its arguments and on the last write).
-    """
-
-    def __init__(
-        self,
-        directory: PathLike,
-        every: float | None = None,
-        every_steps: int | None = None,
-        prefix: str = "particles",
-        binary: bool = True,
-        appended: bool = False,
-        level: int | None = None,
-    ) -> None:
-        if level is not None and (isinstance(level, bool) or not isinstance(level, int)):
-            raise ValueError(f"VTK.level must be an integer or None, got {level!r}")
-        self.level = level
-        if (every is None) == (every_steps is None):
-            raise ValueError(
-                "VTK needs exactly one of every (s) or every_steps, "
-                f"got every={every!r}, every_steps={every_steps!r}"
-            )
-        if every is not None:
-            if (
-                isinstance(every, bool)
-                or not isinstance(every, numbers.Real)
-                or not math.isfinite(every)
-                or every <= 0
-            ):
-                raise ValueError(f"VTK.every must be a positive finite time in s, got {every!r}")
-            every = float(every)
-        if every_steps is not None:
-            if isinstance(every_steps, bool) or not isinstance(every_steps, numbers.Integral):
-                raise ValueError(f"VTK.every_steps must be a positive integer, got {every_steps!r}")
-            if every_steps <= 0:
-                raise ValueError(f"VTK.every_steps must be a positive integer, got {every_steps!r}")
-            every_steps = int(every_steps)
-        if not isinstance(prefix, str) or not prefix or "/" in prefix or os.sep in prefix:
-            raise ValueError(
-                f"VTK.prefix must be a non-empty file name without path separators, got {prefix!r}"
-            )
-        if appended and not binary:
-            raise ValueError("VTK.appended=True requires binary=True, got binary=False")
-
-        self.directory = Path(directory)
-        self.every = every
-        self.every_steps = every_steps
-        self.prefix = prefix
-        self.binary = bool(binary)
-        self.appended = bool(appended)
-        self.files: list[Path] = []  # snapshot files written, in order
-        self.pvd = PVDSeries(self.directory / f"{prefix}.pvd")
-        self._last_step: int | None = None  # step of the last write
-        self._next_index = 0  # index n of the next output time n * every not yet covered
-        self._time_step: float | None = None  # last time step seen by next_step, s
-
-    def __repr__(self) -> str:
-        if self.every is not None:
-            sched = f"every={self.every!r}"
-        else:
-            sched = f"every_steps={self.every_steps}"
-        return f"VTK({str(self.directory)!r}, {sched}, prefix={self.prefix!r})"
-
-    def next_step(self, step: int, time: float, time_step: float) -> int:
-        """Smallest step >= ``step`` at which to write.
-
-        Args:
-            step: current step number.
-            time: simulated time at ``step``, s.
-            time_step: integration time step, s (assumed constant until the returned step).
-        """
-        step = int(step)
-        self._time_step = float(time_step)
-        if self._last_step is None:
-            return step  # never written yet: write now
-        earliest = max(step, self._last_step + 1)
-        if self.every_steps is not None:
-            k = self.every_steps
-            return -(-earliest // k) * k  # ceil to a multiple of k
-        assert self.every is not None
-        target = self._next_index * self.every
-        # first step whose time reaches the target (tolerance 1e-6 step for round-off)
-        steps_ahead = math.ceil((target - float(time)) / float(time_step) - 1e-6)
-        return max(step + steps_ahead, earliest)
-
-    def _write_walls(self, sim: Any, step: int, time: float) -> None:
-        """Every wall (planes clipped to the domain, rectangles, cylinders, meshes): one .vtp
-        per snapshot (cell data ``wall``, the wall's index) in ``<prefix>_walls.pvd``; written
-        once when no wall moves."""
-        if not getattr(sim, "walls", None) or getattr(sim, "rank", 0) != 0:
-            return
-        surfaces = wall_surfaces(sim)
-        if not surfaces.moving and getattr(self, "_walls_written", False):
-            return
-        if len(surfaces.triangles) == 0:
-            return
-        name = f"{self.prefix}_walls_{step:08d}.vtp"
-        write_vtp_mesh(
-            self.directory / name,
-            surfaces.vertices,
-            surfaces.triangles,
-            cell_data={"wall": surfaces.wall},
-            binary=self.binary,
-            appended=self.appended,
-        )
-        if not hasattr(self, "walls_pvd"):
-            self.walls_pvd = PVDSeries(self.directory / f"{self.prefix}_walls.pvd")
-        self.walls_pvd.add(time, name)
-        self._walls_written = True
-
-    def write(self, sim: Any) -> Path:
-        """Write the snapshot of ``sim`` at its current step and add it to the .pvd index.
-
-        ``sim`` must provide ``step``, ``time`` (s) and the ``particles()`` context manager.
-        Returns the path of the .vtp file.
-        """
-        step = int(sim.step)
-        time = float(sim.time)
-        self.directory.mkdir(parents=True, exist_ok=True)
-        rank, ranks = int(getattr(sim, "rank", 0)), int(getattr(sim, "ranks", 1))
-        name = f"{self.prefix}_{step:08d}.vtp"
-        if ranks > 1:
-            name = f"{self.prefix}_{step:08d}_r{rank}.vtp"
-        path = self.directory / name
-        with sim.particles(writable=False) as p:
-            point_data = {
-                "radius": p.radius,
-                "velocity": p.velocity,
-                "angular_velocity": p.angular_velocity,
-                "force": p.force,
-            }
-            torque = getattr(p, "torque", None)
-            if torque is not None:
-                point_data["torque"] = torque
-            point_data.update({"id": p.id, "material": p.material, "mass": p.mass})
-            if ranks > 1:
-                point_data["rank"] = np.full(len(p), rank, dtype=np.int32)
-            if self.level is not None:
-                point_data["level"] = np.full(len(p), self.level, dtype=np.int32)
-            write_vtp(path, p.position, point_data, binary=self.binary, appended=self.appended)
-            if ranks > 1 and rank == 0:
-                index = f"{self.prefix}_{step:08d}.pvtp"
-                pieces = [f"{self.prefix}_{step:08d}_r{r}.vtp" for r in range(ranks)]
-                write_pvtp(self.directory / index, pieces, point_data)
-                name, path = index, self.directory / index
-        if rank == 0:
-            self.pvd.add(time, name)
-        if not self.files or self.files[-1] != path:
-            self.files.append(path)
-        self._write_walls(sim, step, time)
-        self._last_step = step
-        if self.every is not None:
-            dt = self._time_step if self._time_step is not None else getattr(sim, "time_step", 0)
-            # output times up to time (+ 1e-3 step for round-off) are covered by this snapshot
-            covered = math.floor((time + 1e-3 * float(dt or 0.0)) / self.every)
-            self._next_index = max(self._next_index, covered + 1)
-        return path
