@@ -49,6 +49,7 @@ nitpick_ignore_regex = [
     ("py:class", r"(_core|grainscale\._core)\..*"),
     ("py:class", r"mpi4py\..*"),
     ("py:class", r"PathLike"),
+    ("py:class", r"Extra"),  # the type of VTK.extra (a mapping of callables)
     ("py:func", r"os\..*"),
     # package-internal classes that appear in signatures (mixins, the engine interface)
     ("py:class", r"(grainscale\.)?(sim_walls\.)?(WallMethods|WallGeometry)"),
