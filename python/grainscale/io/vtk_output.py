@@ -56,8 +56,9 @@ class VTK:
             (grainscale.io.particle_fields), e.g. ``{"speed": lambda p:
             np.linalg.norm(p.velocity, axis=1)}``. Evaluated at every snapshot.
         resume: continue the ``.pvd`` series found in ``directory`` (keep its entries before
-            this writer's first snapshot, see :meth:`grainscale.io.PVDSeries.resume`): a run restarted from a
-            checkpoint into the same directory extends the series. False starts a new one.
+            this writer's first snapshot, see :meth:`grainscale.io.PVDSeries.resume`): a run
+            restarted from a checkpoint into the same directory extends the series. False
+            starts a new one.
 
     Example (files in a temporary directory):
         >>> import tempfile, numpy as np, grainscale as gs
