@@ -8,23 +8,24 @@ through its top, the bed settles, a shutter under the orifice slides away and th
 discharges for 0.8 s. The orifice is 6 particle diameters wide, but only 3 parcels of a
 coarse-grained model with h = 2 (parcels twice the size, ``grainscale.scaling`` scheme "cg"):
 
-* **pure CG, h = 2**: an arch of parcels forms over the orifice and the silo does not
-  discharge (Beverloo's law: the flow stops as D0 approaches a few particle diameters; the
-  "empty annulus" is k ~ 1.5 parcel diameters wide, Beverloo, Leniger & van de Velde, Chem.
-  Eng. Sci. 15 (1961) 260);
+* **pure CG, h = 2**: an arch of parcels forms over the orifice and the silo stops (grains
+  arch over orifices of a few diameters; clogging practically vanishes only above about 5 for
+  spheres: Zuriguel et al., Phys. Rev. E 71 (2005) 051303; in studies/silo_cg parcels at
+  D0 / (h d) = 3 clogged in 5 runs of 5);
 * **MLCG 2 -> 1**: a ``gs.Hierarchy`` of h = 2 everywhere and the resolved particles (h = 1)
   in a box 3 D0 wide and 2 D0 high around the orifice (``gs.Level(cg=1, region=...)``);
   the coarse level follows the fine level's discharge and holds the inventory;
-* **resolved** (h = 1 everywhere): the reference, read from ``examples/data/
-  silo_reference.json`` (six seeds of studies/mlcg_jam, with its provenance) or run live with
-  ``--full``.
+* **resolved** (h = 1 everywhere): the reference, read from the package data
+  ``examples/data/silo_reference.json`` (six seeds of studies/mlcg_jam, with its provenance)
+  or run live with ``--full``.
 
 It prints, per run, the discharge rate W (the slope of the discharged mass from 0.08 s after
 opening), its error against the reference, the particle counts (per level for the hierarchy),
 wall-clock and CPU time, the speed-up of the hierarchy over the resolved run, and the
 hierarchy's books of the material (``Hierarchy.mass_balance``). Written to the output
 directory: ``discharge.png`` (discharged mass against time for the three runs), ``levels.png``
-(a thin vertical slice through the orifice at the end, particles coloured by level),
+(the section by the vertical plane through the orifice, at the opening and at the end,
+particles coloured by level),
 ``level0.pvd``/``level1.pvd`` (every level's snapshots with a ``level`` point field),
 ``levels.pvd`` (the material as the hierarchy represents it: each level where it is the
 finest, with ``level``), ``cells0.pvd`` (the exchange cells' fields), ``summary.txt`` and
@@ -64,7 +65,7 @@ class SiloCase:
 
     width: float = 0.048  # the silo is width x width (m)
     orifice: float = 0.012  # D0: square orifice D0 x D0 in the middle of the floor (m)
-    height: float = 0.08  # the silo walls reach this height; the pour face is there (m)
+    height: float = 0.08  # the pour face is at this height, the domain's top 10 mm above (m)
     below: float = 0.02  # the domain reaches this far below the floor (m)
     diameter: float = 2e-3  # resolved particle diameter d (m)
     spread: float = 0.05  # diameters uniform in d (1 +/- spread)
@@ -109,6 +110,7 @@ class SiloCase:
 
     @property
     def material(self) -> gs.Material:
+        """The spheres' (and the walls') material."""
         return gs.Material(
             density=self.density,
             youngs_modulus=self.youngs_modulus,
@@ -158,7 +160,7 @@ def reference_parameters(case: SiloCase) -> gs.scaling.ParameterSet:
         rect(corner=(lo, hi, 0), edge1=(d0, 0, 0), edge2=(0, w - hi, 0), material=glass),
     ]
     d = case.diameter
-    walls.append(  # the shutter, 0.05 d below the floor and a diameter wider than the orifice
+    walls.append(  # the shutter: 0.05 d below the floor, overlapping the orifice by d each side
         rect(
             corner=(lo - d, lo - d, -0.05 * d),
             edge1=(d0 + 2 * d, 0, 0),
@@ -167,8 +169,9 @@ def reference_parameters(case: SiloCase) -> gs.scaling.ParameterSet:
         )
     )
     size = gs.dist.Uniform(0.5 * d * (1 - case.spread), 0.5 * d * (1 + case.spread))
-    # The pour face keeps 4 parcel diameters of h = 4 from the walls, as in studies/mlcg_jam
-    # (whose resolved runs are the reference): the stream is dense (solid fraction 0.47).
+    # The pour face keeps 16 mm (2 parcel diameters at h = 4) from the walls, as in
+    # studies/mlcg_jam, whose resolved runs are the reference: the stream is dense (solid
+    # fraction 0.47).
     margin = 8 * d
     stream = gs.insert.Stream(
         gs.insert.RectangleFace(
@@ -254,6 +257,7 @@ class Run:
     mass_balance: dict[str, Any] = field(default_factory=dict)
     max_unaccounted: float = 0.0  # worst |unaccounted| / (initial + inserted) over the samples
     extra: dict[str, Any] = field(default_factory=dict)  # the reference's seeds and provenance
+    final: report.Snapshot | None = None  # the particles at the end (single-level runs)
 
 
 @dataclass
@@ -332,15 +336,17 @@ def run_single(case: SiloCase, h: float, say: Say) -> Run:
     run.wall_clock, run.cpu_time = time.perf_counter() - t0, time.process_time() - c0
     run.rate, run.clogged = discharge_rate(run.history, case.transient)
     run.inserted = float(sim.streams[0].inserted_mass)
+    title = f"{label}, {sim.time - case.open_time:.2f} s after opening"
+    run.final = report.single_snapshot(sim, h, title)
     return run
 
 
 def run_hierarchy(
     case: SiloCase, output: Path | None, say: Say
-) -> tuple[Run, gs.Hierarchy, list[report.Snapshot]]:
+) -> tuple[Run, list[report.Snapshot]]:
     """Pour, settle and discharge the hierarchy, its VTK files into ``output`` (None: none).
     Samples the finest level's outlet, the particle counts and the books every SAMPLE s;
-    returns the run, the hierarchy and its particles at the opening and at the end."""
+    returns the run and the hierarchy's particles at the opening and at the end."""
     run = Run(name="mlcg", label=f"MLCG {case.coarse:g} -> 1")
     h = build_hierarchy(case)
     series = report.LevelSeries(output) if output is not None else None
@@ -352,19 +358,13 @@ def run_hierarchy(
     _set_shutter(h.sims, SHUTTER_SPEED)
     h.run(until=case.open_time + SHUTTER_TIME)
     _set_shutter(h.sims, 0.0)
-    snapshots = [report.snapshot(h, case.open_time)]
-    outlet = h.level(len(h.sims) - 1).outlets[0]
+    title = f"{run.label}, {{:.2f}} s after opening"
+    snapshots = [report.snapshot(h, title.format(h.time - case.open_time))]
     say(f"{run.label}: discharging ...")
     while h.time < case.end_time - 1e-9:
         h.run(until=min(h.time + SAMPLE, case.end_time))
         t = h.time - case.open_time
-        run.history.append((t, float(outlet.removed_mass)))
-        counts = [s.num_particles for s in h.sims]
-        if sum(counts) > sum(run.particles):
-            run.particles = counts
-        books = h.mass_balance()
-        total = books["initial"] + books["inserted"]
-        run.max_unaccounted = max(run.max_unaccounted, abs(books["unaccounted"]) / total)
+        _record(run, h, t)
         if series is not None and (len(run.history) == 1 or _crossed(t, 2 * VTK_EVERY)):
             series.write(h)
         if _crossed(t, 0.1):
@@ -373,8 +373,20 @@ def run_hierarchy(
     run.rate, run.clogged = discharge_rate(run.history, case.transient)
     run.mass_balance = h.mass_balance()
     run.inserted = float(run.mass_balance["inserted"])
-    snapshots.append(report.snapshot(h, case.open_time))
-    return run, h, snapshots
+    snapshots.append(report.snapshot(h, title.format(h.time - case.open_time)))
+    return run, snapshots
+
+
+def _record(run: Run, h: gs.Hierarchy, t: float) -> None:
+    """One sample of the hierarchy at t (s after opening): the finest level's discharged mass,
+    the particle counts (kept where their sum peaks) and the books' unaccounted mass."""
+    run.history.append((t, float(h.level(len(h.sims) - 1).outlets[0].removed_mass)))
+    counts = [s.num_particles for s in h.sims]
+    if sum(counts) > sum(run.particles):
+        run.particles = counts
+    books = h.mass_balance()
+    total = books["initial"] + books["inserted"]
+    run.max_unaccounted = max(run.max_unaccounted, abs(books["unaccounted"]) / total)
 
 
 def _crossed(t: float, every: float) -> bool:
@@ -401,7 +413,7 @@ def run(
     Args:
         output: output directory (created if needed).
         quick: the shallower, shorter case QUICK (its own reference).
-        full: run the resolved reference live too (about twice the hierarchy's time).
+        full: run the resolved reference live too (about 2 minutes of CPU more).
         seed: seed of the pour (the reference is over its own seeds).
         verbose: print progress and the summary.
         vtk: write the hierarchy's VTK files.
@@ -419,14 +431,15 @@ def run(
     t_start = time.perf_counter()
     runs: dict[str, Run] = {"cg": run_single(case, case.coarse, say)}
     say(report.run_line(runs["cg"]))
-    runs["mlcg"], _, snapshots = run_hierarchy(case, out if vtk else None, say)
+    runs["mlcg"], snapshots = run_hierarchy(case, out if vtk else None, say)
     say(report.run_line(runs["mlcg"]))
     if full:
         runs["resolved"] = run_single(case, 1.0, say)
         say(report.run_line(runs["resolved"]))
     shipped = load_reference("quick" if quick else "default", case)
     result = DemoResult(case=case, runs=runs, shipped=shipped, output=out, vtk=vtk)
-    report.finish(result, snapshots, time.perf_counter() - t_start, lead)
+    pictures = [*snapshots, runs["cg"].final] if runs["cg"].final is not None else snapshots
+    report.finish(result, pictures, time.perf_counter() - t_start, lead)
     say("")
     say(result.summary_text)
     return result

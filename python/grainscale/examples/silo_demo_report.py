@@ -35,17 +35,21 @@ class Snapshot:
     is the finest (outside its children's region cells; its other particles are the shadow of
     the finer level's material)."""
 
-    time: float  # s after the opening
+    title: str
     levels: list[dict[str, np.ndarray]]
     cg: list[float]
     regions: list[tuple[np.ndarray, np.ndarray]]  # the finer levels' region boxes (lo, hi), m
 
 
-def snapshot(h: gs.Hierarchy, open_time: float) -> Snapshot:
+def _particles_of(sim: gs.Simulation) -> dict[str, np.ndarray]:
+    return sim.gather(("position", "radius", "velocity"))
+
+
+def snapshot(h: gs.Hierarchy, title: str) -> Snapshot:
     """Collective: the particles of every level of ``h`` (on every rank)."""
     levels = []
     for k, sim in enumerate(h.sims):
-        p = sim.gather(("position", "radius", "velocity"))
+        p = _particles_of(sim)
         finest = np.ones(len(p["radius"]), bool)
         for c in h.couplings:
             if c.parent == k:
@@ -55,7 +59,13 @@ def snapshot(h: gs.Hierarchy, open_time: float) -> Snapshot:
     for lv in h.levels[1:]:
         lo, hi = lv.region._to_core("Level").bounds()  # type: ignore[union-attr]
         regions.append((np.asarray(lo, float), np.asarray(hi, float)))
-    return Snapshot(h.time - open_time, levels, [lv.cg for lv in h.levels], regions)
+    return Snapshot(title, levels, [lv.cg for lv in h.levels], regions)
+
+
+def single_snapshot(sim: gs.Simulation, cg: float, title: str) -> Snapshot:
+    """Collective: the particles of a one-level run at coarse-graining ratio ``cg``."""
+    p = _particles_of(sim)
+    return Snapshot(title, [{**p, "finest": np.ones(len(p["radius"]), bool)}], [cg], [])
 
 
 class LevelSeries:
@@ -69,7 +79,7 @@ class LevelSeries:
 
     def write(self, h: gs.Hierarchy) -> None:
         """Collective: add a snapshot of ``h`` at its current time."""
-        snap = snapshot(h, 0.0)
+        snap = snapshot(h, "")
         if h.sims[0].rank != 0:
             return
         parts = [{k: v[lv["finest"]] for k, v in lv.items()} for lv in snap.levels]
@@ -217,6 +227,13 @@ def reference_lines(result: DemoResult) -> list[str]:
             f"mass of seed {e['history_seed']}; {made['what']} at commit {made['commit'][:10]} "
             f"({made['date'][:10]})"
         )
+        checks = [p for p in e["provenance"] if p.get("history_identical")]
+        if checks:
+            lines.append(
+                f"  (seed {e['history_seed']} rerun by this demo's code at commit "
+                f"{checks[-1]['commit'][:10]} ({checks[-1]['date'][:10]}): the same discharge, "
+                "sample for sample)"
+            )
         if "mlcg" in e:
             m = e["mlcg"]
             lines.append(
@@ -232,25 +249,34 @@ def speed_lines(result: DemoResult) -> list[str]:
     ref, mlcg = result.reference, result.runs["mlcg"]
     if ref is None or result.speed_up is None:
         return []
-    cpu = math.isfinite(ref.cpu_time)
-    basis = "CPU time" if cpu else "wall-clock"
+    fewer = f"{ref.particles[0] / sum(mlcg.particles):.2f} x fewer particles"
+    if not math.isfinite(ref.cpu_time):
+        return [
+            f"- speed-up of {mlcg.label} over the resolved run: {result.speed_up:.2f} x in "
+            f"wall-clock (recorded with the reference); {fewer}"
+        ]
     if ref.live:
-        source = "both run now"
-    else:
-        t = ref.extra["timing"][0]
-        when = [p for p in ref.extra["provenance"] if "rerun" in p["what"] or "runs" in p["what"]]
-        at = f" at commit {when[-1]['commit'][:10]}" if when else ""
-        source = f"the resolved run's recorded {basis} (seed {t.get('seed', '?')}{at}), not run now"
+        wall = ref.wall_clock / mlcg.wall_clock
+        return [
+            f"- speed-up of {mlcg.label} over the resolved run (both run now): "
+            f"{result.speed_up:.2f} x in CPU time, {wall:.2f} x in wall-clock; {fewer}"
+        ]
+    t = ref.extra["timing"][0]
+    runs = [p for p in ref.extra["provenance"] if "rerun" in p["what"] or "runs" in p["what"]]
+    at = f", commit {runs[-1]['commit'][:10]}" if runs else ""
     return [
-        f"- speed-up of {mlcg.label} over the resolved run: {result.speed_up:.2f} x in {basis} "
-        f"({source}); {ref.particles[0] / sum(mlcg.particles):.2f} x fewer particles"
+        f"- speed-up of {mlcg.label} over the resolved run: {result.speed_up:.2f} x in CPU time "
+        f"(the resolved run not run now: its CPU time recorded with the reference, seed "
+        f"{t.get('seed', '?')}{at}; the engine is single-threaded, so on an idle machine the "
+        f"wall-clock ratio is about the same); {fewer}"
     ]
 
 
 def books_lines(r: Run) -> list[str]:
     """The hierarchy's books and how the coarse level followed the fine one."""
     b = r.mass_balance
-    lines = [f"- books of the material: {line}" for line in describe_balance(b).split("\n")]
+    lines = ["- books of the material (Hierarchy.mass_balance):"]
+    lines += [f"    {line}" for line in describe_balance(b).split("\n")]
     lines.append(
         f"- unaccounted mass: {b['unaccounted']:.1e} kg at the end, at most "
         f"{r.max_unaccounted:.1e} of the material over the discharge (sampled every 0.01 s)"
@@ -409,7 +435,7 @@ def plot_discharge(path: Path, result: DemoResult) -> None:
         f"{c.orifice / (c.coarse * c.diameter):g} parcels at h = {c.coarse:g} (seed {c.seed})",
         fontsize=10,
     )
-    ax.legend(fontsize=7.5, loc="upper left")
+    ax.legend(fontsize=7.5, loc="lower right")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(path)
@@ -424,20 +450,25 @@ def plot_levels(path: Path, case: SiloCase, snapshots: list[Snapshot]) -> None:
 
     plt = pyplot()
     fig, axes = plt.subplots(
-        1, len(snapshots), figsize=(4.2 * len(snapshots), 5.0), dpi=150, sharey=True, squeeze=False
+        1, len(snapshots), figsize=(3.8 * len(snapshots), 5.0), dpi=150, sharey=True, squeeze=False
     )
-    top = max(float(np.max(lv["position"][:, 2] + lv["radius"])) for lv in snapshots[0].levels)
+    top = max(
+        float(np.max(lv["position"][:, 2] + lv["radius"], initial=0.0))
+        for snap in snapshots
+        for lv in snap.levels
+    )
     for ax, snap in zip(axes[0], snapshots, strict=True):
         _section(ax, case, snap)
         ax.set_xlim(-1.0, case.width * 1e3 + 1.0)
         ax.set_ylim(-case.below * 1e3, top * 1e3 + 3.0)
         ax.set_aspect("equal")
         ax.set_xlabel("x (mm)")
-        ax.set_title(f"{snap.time:.2f} s after opening", fontsize=10)
+        ax.set_title(snap.title, fontsize=9)
     axes[0][0].set_ylabel("z (mm)")
+    cgs = max((snap.cg for snap in snapshots), key=len)
     handles = [
         plt.matplotlib.patches.Patch(color=COLOURS[k], label=f"level {k}: h = {h:g}")
-        for k, h in enumerate(snapshots[0].cg)
+        for k, h in enumerate(cgs)
     ]
     handles.append(
         plt.matplotlib.patches.Patch(
@@ -445,8 +476,10 @@ def plot_levels(path: Path, case: SiloCase, snapshots: list[Snapshot]) -> None:
         )
     )
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8, frameon=False)
-    fig.suptitle("Section through the orifice, coloured by level", fontsize=11)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.suptitle(
+        "Section by the vertical plane through the orifice, coloured by level", fontsize=11
+    )
+    fig.tight_layout(rect=(0, 0.07, 1, 0.97))
     fig.savefig(path)
     plt.close(fig)
 

@@ -7,11 +7,13 @@ the discharge rate W per seed and their mean, the discharged mass against time o
 particle count, the wall-clock and CPU time of one resolved run, and ``provenance``: a list of
 what produced the entry (command, code version and commit, date, machine).
 
-Made with::
+Made with (from the repository root; the exact commands are in the file's provenance)::
 
-    python -m grainscale.examples.silo_reference from-study studies/mlcg_jam/results.json \\
-        --commit b8c2bc7 --date 2026-12-06 --command "python -m ..." --rerun-seed 1
     python -m grainscale.examples.silo_reference run --quick --seeds 1 2 3
+    python -m grainscale.examples.silo_reference from-study studies/mlcg_jam/results.json \\
+        --commit b8c2bc729d5030afdb85bfb69dcbd316be84a197 --date 2026-12-06 \\
+        --command "python -m grainscale.examples.mlcg_jam --seeds 1 2 3 4 5 6 ..." \\
+        --rerun-seed 1
 
 ``from-study`` converts the resolved runs of studies/mlcg_jam (same case, six seeds) and reruns
 one seed with this module's code, recording whether it reproduces the study's history exactly
