@@ -1,5 +1,6 @@
 # grainscale entry points. Every target installs what it needs on a fresh Debian machine.
-#   make demo    run the demo case (writes VTK files, a PNG plot and a summary)
+#   make demo    run the demo: a silo that jams coarse graining, pure CG and multi-level against
+#                the resolved reference (prints the rates; writes plots, VTK files, a summary)
 #   make test    build, install and run the test suite
 #   make bench   side-by-side benchmark against LIGGGHTS (installs it if missing)
 #   make docs    build the documentation site into build/docs (open build/docs/index.html)

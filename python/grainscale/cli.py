@@ -1,10 +1,15 @@
 """The ``grainscale`` command.
 
-    grainscale demo [--output DIR] [--particles N] [--duration S] [--seed K] [--stl FILE] [--quick]
+    grainscale demo [--output DIR] [--full] [--quick] [--seed K] [--no-vtk]
+    grainscale hopper [--output DIR] [--particles N] [--duration S] [--seed K] [--stl FILE]
+                      [--quick]
     grainscale info
 
-``demo`` runs the demo of ``make demo``, :mod:`grainscale.examples.hopper_demo`, with the same
-options; ``info`` prints the version and how the C++ core was built.
+``demo`` runs the demo of ``make demo``, :mod:`grainscale.examples.silo_demo` (a silo whose
+orifice jams coarse graining: pure CG and a multi-level hierarchy against a resolved
+reference), with the same options; ``hopper`` the hopper example,
+:mod:`grainscale.examples.hopper_demo`; ``info`` prints the version and how the C++ core was
+built.
 """
 
 from __future__ import annotations
@@ -43,19 +48,30 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from .examples import hopper_demo
+    from .examples import silo_demo
 
     try:
-        hopper_demo.run_from_args(args)
+        silo_demo.run_from_args(args)
     except ValueError as err:
         print(f"grainscale demo: error: {err}", file=sys.stderr)
         return 2
     return 0
 
 
+def _hopper(args: argparse.Namespace) -> int:
+    from .examples import hopper_demo
+
+    try:
+        hopper_demo.run_from_args(args)
+    except ValueError as err:
+        print(f"grainscale hopper: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
-    from .examples import hopper_demo
+    from .examples import hopper_demo, silo_demo
 
     parser = argparse.ArgumentParser(
         prog="grainscale", description="grainscale: discrete element method for granular media."
@@ -65,12 +81,23 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     demo = sub.add_parser(
         "demo",
-        help="fill a conical hopper and discharge it (VTK, PNG plot, summary); make demo",
+        help="a silo whose orifice jams coarse graining: pure CG and multi-level against the "
+        "resolved reference; make demo",
+        description=silo_demo.DESCRIPTION + " Prints the discharge rates, their errors, the "
+        "particle counts and the speed-up; writes discharge.png, levels.png, ParaView files "
+        "(levels.pvd, level<k>.pvd with a `level` field), summary.txt and summary.json into the "
+        "output directory.",
+    )
+    silo_demo.add_arguments(demo)
+    demo.set_defaults(func=_demo)
+    hopper = sub.add_parser(
+        "hopper",
+        help="fill a conical hopper and discharge it (VTK, PNG plot, summary)",
         description=hopper_demo.DESCRIPTION + " Writes ParaView files (particles.pvd), a PNG "
         "plot, history.csv and summary.md into the output directory.",
     )
-    hopper_demo.add_arguments(demo)
-    demo.set_defaults(func=_demo)
+    hopper_demo.add_arguments(hopper)
+    hopper.set_defaults(func=_hopper)
     info = sub.add_parser("info", help="version and build configuration")
     info.set_defaults(func=_info)
     return parser

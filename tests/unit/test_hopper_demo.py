@@ -1,5 +1,5 @@
-"""The demo (``make demo``, ``grainscale demo``: the hopper of grainscale.examples.hopper_demo):
-STL hopper, poured fill, discharge; its files and physics."""
+"""The hopper example (``grainscale hopper``, grainscale.examples.hopper_demo): STL hopper,
+poured fill, discharge; its files and physics."""
 
 from __future__ import annotations
 
@@ -20,10 +20,10 @@ from grainscale.examples import hopper_demo, hopper_geometry, pour_and_settle
 
 @pytest.fixture(scope="module")
 def quick_hopper(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """Run ``grainscale demo --quick`` (what ``make demo`` runs) once; (output dir, stdout)."""
+    """Run ``grainscale hopper --quick`` once; (output dir, stdout)."""
     out = tmp_path_factory.mktemp("hopper")
     proc = subprocess.run(
-        [sys.executable, "-m", "grainscale.cli", "demo", "--quick", "--output", out],
+        [sys.executable, "-m", "grainscale.cli", "hopper", "--quick", "--output", out],
         capture_output=True,
         text=True,
         timeout=120,
@@ -127,7 +127,7 @@ def test_examples_reject_bad_options(
     assert message in capsys.readouterr().err
 
 
-def test_grainscale_demo_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> None:
-    assert cli.main(["demo", "--particles", "3", "--output", "unused"]) == 2
+def test_grainscale_hopper_rejects_bad_options(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["hopper", "--particles", "3", "--output", "unused"]) == 2
     err = capsys.readouterr().err
-    assert "grainscale demo: error: HopperCase.particles must be at least 10, got 3" in err
+    assert "grainscale hopper: error: HopperCase.particles must be at least 10, got 3" in err

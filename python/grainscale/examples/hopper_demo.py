@@ -1,13 +1,14 @@
 """Hopper discharge: a conical hopper read from an STL file, filled by a poured stream, emptied.
 
-Run it with ``python -m grainscale.examples.hopper_demo --output out/demo`` (``make demo``).
-The hopper — a cylindrical bin on a 30-degree (half-angle) cone with a 21 mm outlet — is a
-triangle mesh stored in ``grainscale/examples/data/hopper.stl`` (written by ``hopper_geometry``
-/ ``--write-stl``) and read back with ``gs.geometry.Mesh.from_stl``. A sliding gate (a small
-mesh square) closes the outlet while a stream of glass beads (d = 3 mm +/- 10 %, uniform) is
-poured in through a disc face at the top; once the bed has settled the gate slides away and the
-hopper discharges into a collection box below. Hertz–Mindlin (restitution 0.5, friction 0.5)
-with EPSD rolling resistance (mu_r = 0.05), Young's modulus reduced to 1e7 Pa.
+Run it with ``grainscale hopper --output out/hopper`` (the same as ``python -m
+grainscale.examples.hopper_demo``). The hopper — a cylindrical bin on a 30-degree
+(half-angle) cone with a 21 mm outlet — is a triangle mesh stored in
+``grainscale/examples/data/hopper.stl`` (written by ``hopper_geometry`` / ``--write-stl``) and
+read back with ``gs.geometry.Mesh.from_stl``. A sliding gate (a small mesh square) closes the
+outlet while a stream of glass beads (d = 3 mm +/- 10 %, uniform) is poured in through a disc
+face at the top; once the bed has settled the gate slides away and the hopper discharges into
+a collection box below. Hertz–Mindlin (restitution 0.5, friction 0.5) with EPSD rolling
+resistance (mu_r = 0.05), Young's modulus reduced to 1e7 Pa.
 
 Written to the output directory:
     particles.pvd + particles_<step>.vtp   particle snapshots every 0.02 s
@@ -454,7 +455,7 @@ def run(
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--output", default="out/demo", help="output directory (default: %(default)s)"
+        "--output", default="out/hopper", help="output directory (default: %(default)s)"
     )
     parser.add_argument(
         "--particles",
@@ -498,7 +499,7 @@ def case_from_args(args: argparse.Namespace) -> HopperCase:
     return HopperCase(particles=particles, duration=duration, seed=args.seed, **extra)
 
 
-DESCRIPTION = "Fill a conical hopper (read from an STL file) and discharge it (grainscale demo)."
+DESCRIPTION = "Fill a conical hopper (read from an STL file) and discharge it (grainscale hopper)."
 
 
 def run_from_args(args: argparse.Namespace) -> HopperResult | None:

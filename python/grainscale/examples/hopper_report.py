@@ -50,7 +50,7 @@ def summary(
         else "- discharge rate: not measured (the run ended before 70 % of the inventory left)"
     )
     lines = [
-        "# grainscale demo: hopper discharge",
+        "# grainscale hopper: hopper discharge",
         "",
         f"- hopper: {stl.name} read with gs.geometry.Mesh.from_stl, outlet "
         f"{2 * geo.outlet_radius * mm:.1f} mm, top {2 * geo.top_radius * mm:.1f} mm, height "
