@@ -55,8 +55,9 @@ bool Wall::spins_in_place() const {
 }
 
 Real Wall::step_bound(Real dt, Real reach) const {
-  const Real speed = servo.enabled ? std::max(servo.max_speed, velocity.norm()) : velocity.norm();
-  return dt * (speed + (spins_in_place() ? 0 : angular_velocity.norm() * reach));
+  // A servo's current velocity: its max_speed is a cap, often far above what the gain gives,
+  // and a servo wall pushes particles it touches (their own guard sees them move).
+  return dt * (velocity.norm() + (spins_in_place() ? 0 : angular_velocity.norm() * reach));
 }
 
 }  // namespace grainscale

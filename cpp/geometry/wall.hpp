@@ -72,8 +72,8 @@ struct Wall {
   // Moves the wall rigidly over dt (servo velocity first); returns an upper bound of how far
   // any point of it within `reach` of the origin moved.
   Real advance(Real dt, Real reach);
-  // An upper bound of how far advance() can move a point within `reach` in one step (a servo
-  // at its largest speed): the guards compare it with the particles' radii.
+  // How far advance() moves a point within `reach` in one step at the current velocity: the
+  // guards compare it with the particles' radii.
   Real step_bound(Real dt, Real reach) const;
   // A plane spinning about its normal or a cylinder about its axis keeps its shape in place:
   // only its surface velocity changes.

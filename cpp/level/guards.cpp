@@ -119,7 +119,7 @@ void Level::check_wall_speeds() const {
         << " s), more than max_step_displacement " << guards_.max_step_displacement
         << " x the smallest radius " << guard_r_min_
         << " m: particles could pass through it unseen; reduce the time step or the wall's "
-           "speed (a servo's max_speed counts)";
+           "speed";
     throw std::runtime_error(msg.str());
   }
 }

@@ -11,8 +11,8 @@ advances (cpp/level/guards.hpp):
   for a wall), checked at the last step of every run chunk (chunks last 0.25-1 s of wall-clock
   time, and end at every thermo line and output);
 - a wall that moves more than ``max_step_displacement`` x the smallest radius in one step
-  (translation, a servo at its ``max_speed``, rotation times the wall's reach; a drum spinning
-  about its own axis stays in place), checked when every run chunk starts.
+  (its current translation, a servo's included, and rotation times the wall's reach; a drum
+  spinning about its own axis stays in place), checked when every run chunk starts.
 
 A guard that trips stops the run with a ``RuntimeError`` on every rank naming the particle's
 global id, the step, the value against the limit and a remedy; with ``emergency_checkpoint`` set,

@@ -319,11 +319,16 @@ def core_solid_fraction(position: np.ndarray, radius: np.ndarray, die_diameter: 
 
 
 def _move_wall_to(sim: gs.Simulation, wall: int, z: float) -> None:
-    """Put a wall (not touching any particle) at height z in one step, then stop it."""
+    """Put a wall (not touching any particle) at height z in one step, then stop it. The
+    guards would stop a wall that moves more than half a radius in a step (it could jump over
+    particles): this one is known to be clear of them, so they are off for that step."""
     dz = z - float(sim.walls[wall].position[2])
+    guards = sim.guards
+    sim.guards = False
     sim.walls[wall].set_motion(velocity=(0.0, 0.0, dz / sim.time_step))
     sim.run(steps=1)
     sim.walls[wall].set_motion(velocity=(0.0, 0.0, 0.0))
+    sim.guards = guards
 
 
 def _settle(sim: gs.Simulation, speed: float, limit: float) -> bool:

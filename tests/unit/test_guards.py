@@ -238,9 +238,8 @@ def test_a_wall_faster_than_the_guard_stops_the_run_before_it_starts():
     lid.set_motion(velocity=(0, 0, -50.0))  # 0.25 mm per step: within the guard
     sim.run(steps=1)
     lid.set_motion(velocity=(0, 0, 0))
-    lid.servo = gs.geometry.Servo(target_force=1.0, gain=1.0, max_speed=200.0)
-    with pytest.raises(RuntimeError, match=r"wall 0 moves up to 0\.001 m per step"):
-        sim.run(steps=1)  # a servo counts at its largest speed
+    lid.servo = gs.geometry.Servo(target_force=1e-6, gain=1e-3, max_speed=200.0)
+    sim.run(steps=1)  # a servo's max_speed is only a cap: its current speed counts
 
     drum = gs.Simulation(domain=BOX, gravity=(0, 0, 0), time_step=5e-6, force_time_step=True)
     drum.add_particles(position=[[0.01, 0.01, 0.01]], radius=1e-3, material=GLASS)
