@@ -271,7 +271,7 @@ physics_case("plane_wall_at_500_m_s", "a plane wall at 500 m/s through a resting
 physics_case("rectangle_wall_at_500_m_s", "a rectangle wall at 500 m/s jumps over a sphere",
              lambda: fast_wall("rectangle"), {"steps": 3}, "wall", "particle")  # fmt: skip
 physics_case("sphere_centre_on_mesh", "a sphere whose centre lies on a mesh wall", on_mesh,
-             {"steps": 10}, "wall 0", "particle 0")  # fmt: skip
+             {"steps": 10}, "wall 0", "particle 0|index 0")  # fmt: skip
 physics_case("lost_particles_warn", "2 spheres fall through the open floor (policy warn)",
              lambda: falling_out("warn"), {"until": 0.03}, "left the domain", "ids 0, 1",
              response="warning")  # fmt: skip

@@ -111,7 +111,7 @@ add_case("particles_outside_drum", "a sphere outside an inside-cylinder wall", "
          "index 0", position=[[0.018, 0.01, 0.01]], setup=with_wall(DRUM))  # fmt: skip
 
 
-@case(P, "overlap", "particle 0|particle 1")
+@case(P, "overlap", "particle 0|particle 1|index 0 and index 1")
 def particles_identical_centres(t: Probe) -> None:
     """two spheres with the same centre, then run()"""
     s = sim(gravity=(0, 0, 0))
@@ -120,7 +120,7 @@ def particles_identical_centres(t: Probe) -> None:
         s.run(steps=10, progress=False)
 
 
-@case(P, "overlap", "particle 0|particle 1")
+@case(P, "overlap", "particle 0|particle 1|index 0 and index 1")
 def particles_overlap_ninety_percent(t: Probe) -> None:
     """two spheres overlapping by 90 % of their radius, then run()"""
     s = sim(gravity=(0, 0, 0))
