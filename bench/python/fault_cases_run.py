@@ -120,10 +120,18 @@ def view_write_radius(t: Probe) -> None:
 
 @case(V, "position", "set|assign")
 def view_assign_attribute(t: Probe) -> None:
-    """p.position = zeros inside the block (replacing the array instead of writing it)"""
+    """p.position = new positions inside the block (assigning instead of writing the array):
+    documented to copy the values into the engine's array"""
     s = pair()
-    with t.fault(), s.particles() as p:
-        p.position = np.zeros((2, 3))
+    new = [[0.007, 0.01, 0.01], [0.014, 0.01, 0.01]]
+    with t.fault():
+        with s.particles() as p:
+            p.position = np.array(new)
+        s.run(steps=1, progress=False)
+    with s.particles(writable=False) as p:
+        if np.allclose(p.position, new, atol=1e-6):
+            raise Fine("the positions were copied into the engine's array, as documented")
+        raise Silent(f"assignment accepted, the particles are at {p.position.tolist()}")
 
 
 @case(V, "velocity", "read-only|writable")

@@ -28,6 +28,44 @@ def real(owner: str, name: str, value: object, what: str = "a number") -> float:
     return float(value)  # type: ignore[arg-type]
 
 
+def flag(owner: str, name: str, value: object) -> bool:
+    """``value`` as a bool if it is one (a Python or numpy bool), else ValueError: a string such
+    as ``'no'`` or a number is not taken for its truth value."""
+    if not isinstance(value, bool | np.bool_):
+        raise ValueError(f"{owner}.{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def finite(owner: str, name: str, value: object, unit: str = "") -> float:
+    """``value`` as a float if it is a finite real number (see is_real), else ValueError."""
+    v = real(owner, name, value, f"a finite number{unit}")
+    if not math.isfinite(v):
+        raise ValueError(f"{owner}.{name} must be finite{unit}, got {value!r}")
+    return v
+
+
+def at_least(owner: str, name: str, value: object, lo: float, what: str = "") -> float:
+    """``value`` as a float if it is a finite real number >= ``lo``, else ValueError."""
+    v = real(owner, name, value, f"a number >= {lo:g}{what}")
+    if not (v >= lo and math.isfinite(v)):
+        raise ValueError(f"{owner}.{name} must be >= {lo:g}{what} and finite, got {value!r}")
+    return v
+
+
+def whole(owner: str, name: str, value: object, lo: int = 0) -> int:
+    """``value`` as an int if it is a whole number >= ``lo`` (an int, a numpy integer or a float
+    with an integral value, e.g. 1e4); bools, strings and fractions are refused."""
+    what = {0: "a non-negative integer", 1: "a positive integer"}.get(lo, f"an integer >= {lo}")
+    if not is_real(value):
+        raise ValueError(f"{owner}.{name} must be {what}, got {value!r}")
+    v = value if isinstance(value, int | np.integer) else float(value)  # type: ignore[arg-type]
+    if isinstance(v, float) and not (math.isfinite(v) and v == int(v)):
+        raise ValueError(f"{owner}.{name} must be {what}, got {value!r}")
+    if int(v) < lo:
+        raise ValueError(f"{owner}.{name} must be {what}, got {value!r}")
+    return int(v)
+
+
 def _holds_bool(value: object) -> bool:
     if isinstance(value, bool | np.bool_):
         return True
@@ -138,3 +176,12 @@ def vector3(owner: str, name: str, value: Sequence[float]) -> tuple[float, float
     if bad or not np.all(np.isfinite(a)):
         raise ValueError(f"{owner}.{name} must be a finite 3-vector of numbers, got {value!r}")
     return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def span(lo: Sequence[float], hi: Sequence[float]) -> str:
+    """A box's bounds for a message: ``[(x, y, z), (x, y, z)] m``."""
+
+    def point(p: Sequence[float]) -> str:
+        return "(" + ", ".join(f"{float(x):.6g}" for x in p) + ")"
+
+    return f"[{point(lo)}, {point(hi)}] m"

@@ -25,12 +25,11 @@ damping and the law's own parameters — are resolved with these mixing rules, f
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar, Literal
 
-from ._validate import in_range, non_negative, positive
+from ._validate import at_least, finite, flag, in_range, is_real, non_negative, positive
 from .materials import Material
 
 # --------------------------------------------------------------------------- rolling models
@@ -136,11 +135,9 @@ class Pair:
             if v is not None:
                 positive("Pair", name, v)
         if self.unloading_ratio is not None:
-            r = float(self.unloading_ratio)
-            if not (r >= 1 and math.isfinite(r)):
-                raise ValueError(f"Pair.unloading_ratio must be >= 1 (k2/k1), got {r!r}")
-        if self.pull_off_force is not None and not math.isfinite(float(self.pull_off_force)):
-            raise ValueError(f"Pair.pull_off_force must be finite (N), got {self.pull_off_force!r}")
+            at_least("Pair", "unloading_ratio", self.unloading_ratio, 1, " (k2/k1)")
+        if self.pull_off_force is not None:
+            finite("Pair", "pull_off_force", self.pull_off_force, " (N)")
 
 
 # --------------------------------------------------------------------------- laws
@@ -169,6 +166,8 @@ class _Law:
             self, "restitution", in_range(owner, "restitution", self.restitution, 0, 1)
         )
         object.__setattr__(self, "friction", non_negative(owner, "friction", self.friction))
+        for name in ("limit_force", "tangential_damping"):
+            object.__setattr__(self, name, flag(owner, name, getattr(self, name)))
         if self.rolling is not None and not isinstance(self.rolling, CDT | EPSD | EPSD2):
             raise ValueError(
                 f"{owner}.rolling must be None, CDT, EPSD or EPSD2, got {self.rolling!r}"
@@ -347,16 +346,13 @@ class EEPA(_Law):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.exponent not in (1, 1.5):
+        if not is_real(self.exponent) or self.exponent not in (1, 1.5):
             raise ValueError(f"EEPA.exponent must be 1 or 1.5, got {self.exponent!r}")
         if self.loading_stiffness is not None:
             positive("EEPA", "loading_stiffness", self.loading_stiffness)
-        ratio = float(self.unloading_ratio)
-        if not (ratio >= 1 and math.isfinite(ratio)):
-            raise ValueError(f"EEPA.unloading_ratio must be >= 1 (k2/k1), got {ratio!r}")
+        at_least("EEPA", "unloading_ratio", self.unloading_ratio, 1, " (k2/k1)")
         non_negative("EEPA", "adhesive_stiffness", self.adhesive_stiffness)
-        if not math.isfinite(float(self.pull_off_force)):
-            raise ValueError(f"EEPA.pull_off_force must be finite (N), got {self.pull_off_force!r}")
+        finite("EEPA", "pull_off_force", self.pull_off_force, " (N)")
         positive("EEPA", "adhesion_exponent", self.adhesion_exponent)
 
 

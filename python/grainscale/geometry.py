@@ -10,13 +10,14 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from ._validate import direction, non_negative, positive, real_array, vector3
+from ._validate import direction, finite, flag, non_negative, positive, real_array, vector3
 from .materials import Material
 
 
 @dataclass(frozen=True)
 class Box:
-    """An axis-aligned box [lo, hi] in m, periodic or closed per axis.
+    """An axis-aligned box [lo, hi] in m, periodic or closed per axis (``periodic``: three
+    bools for x, y, z, or one bool for every axis).
 
     Example:
         >>> box = Box(lo=(0, 0, 0), hi=(0.1, 0.1, 0.2), periodic=(True, True, False))
@@ -34,12 +35,9 @@ class Box:
         for a in range(3):
             if not hi[a] > lo[a]:
                 raise ValueError(f"Box.hi must be greater than Box.lo on every axis, got {self.hi}")
-        p = tuple(bool(v) for v in self.periodic)
-        if len(p) != 3:
-            raise ValueError(f"Box.periodic must have three entries, got {self.periodic!r}")
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
-        object.__setattr__(self, "periodic", p)
+        object.__setattr__(self, "periodic", _periodic(self.periodic))
 
     @property
     def length(self) -> np.ndarray:
@@ -59,6 +57,19 @@ class Box:
     def _to_core(self, owner: str) -> _core.Region:
         """The core's region (package-internal; ``owner`` names the box in errors)."""
         return _core.Region.box(self.lo, self.hi)
+
+
+def _periodic(value: object) -> tuple[bool, bool, bool]:
+    """Box.periodic: one bool for every axis or three bools (x, y, z); a string such as 'yes',
+    a number or None is refused (it was taken for its truth value)."""
+    if isinstance(value, bool | np.bool_):
+        return (bool(value),) * 3  # type: ignore[return-value]
+    ok = isinstance(value, list | tuple | np.ndarray) and np.ndim(value) == 1 and len(value) == 3
+    if not ok or not all(isinstance(v, bool | np.bool_) for v in value):  # type: ignore[union-attr]
+        raise ValueError(
+            f"Box.periodic must be True, False or three of them (x, y, z), got {value!r}"
+        )
+    return tuple(bool(v) for v in value)  # type: ignore[return-value, union-attr]
 
 
 @dataclass(frozen=True)
@@ -154,6 +165,7 @@ class Cylinder:
         object.__setattr__(self, "radius", positive("Cylinder", "radius", self.radius, " (m)"))
         if self.length is not None:
             object.__setattr__(self, "length", positive("Cylinder", "length", self.length, " (m)"))
+        object.__setattr__(self, "inside", flag("Cylinder", "inside", self.inside))
         object.__setattr__(self, "velocity", vector3("Cylinder", "velocity", self.velocity))
         object.__setattr__(
             self, "angular_velocity", vector3("Cylinder", "angular_velocity", self.angular_velocity)
@@ -273,6 +285,7 @@ class Mesh:
                 f"Mesh.from_stl.path must hold triangles with finite coordinates, got {path!r} "
                 f"({len(corners) // 3} triangles)"
             )
+        _check_binary_size(path, len(corners) // 3)
         vertices, inverse = np.unique(corners, axis=0, return_inverse=True)
         triangles = inverse.reshape(-1, 3)
         # drop degenerate triangles (repeated vertices)
@@ -281,6 +294,15 @@ class Mesh:
             & (triangles[:, 1] != triangles[:, 2])
             & (triangles[:, 0] != triangles[:, 2])
         )
+        tri = corners.reshape(-1, 3, 3)[keep]
+        with np.errstate(over="ignore", invalid="ignore"):
+            area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        if not np.any(area > 0):
+            raise ValueError(
+                f"Mesh.from_stl.path must hold at least one triangle of non-zero area, got "
+                f"{path!r}: every one of its {len(triangles)} triangle(s) is degenerate (zero "
+                "area: repeated or collinear vertices)"
+            )
         return cls(vertices=vertices, triangles=triangles[keep], material=material, **motion)
 
     def to_stl(self, path: str | os.PathLike[str]) -> None:
@@ -342,6 +364,10 @@ class Servo:
                 "Servo needs exactly one of target_force or target_stress, got "
                 f"target_force={self.target_force!r}, target_stress={self.target_stress!r}"
             )
+        if self.target_force is not None:
+            finite("Servo", "target_force", self.target_force, " (N)")
+        if self.target_stress is not None:
+            finite("Servo", "target_stress", self.target_stress, " (Pa)")
         if self.area is not None:
             positive("Servo", "area", self.area, " (m^2)")
         if self.direction is not None:
@@ -370,6 +396,25 @@ class Servo:
             n = np.cross(wall.edge1, wall.edge2)
             return tuple(float(v) for v in n / np.linalg.norm(n))  # type: ignore[return-value]
         raise ValueError(f"Servo.direction must be given for {type(wall).__name__} walls, got None")
+
+
+def _check_binary_size(path: str | os.PathLike[str], loaded: int) -> None:
+    """A binary STL (its 80-byte header does not start with "solid") must be exactly
+    84 + 50 n bytes for the n triangles its header claims: numpy-stl reads the triangles that
+    are there and says nothing of the rest (a file cut short in a transfer). A header starting
+    with "solid" is an ASCII file or a binary one numpy-stl reads with its own size check."""
+    with open(path, "rb") as fh:
+        head = fh.read(84)
+    if len(head) < 84 or head[:80].lstrip().lower().startswith(b"solid"):
+        return
+    count = int.from_bytes(head[80:84], "little")
+    size = os.path.getsize(path)
+    if size != 84 + 50 * count:
+        raise ValueError(
+            f"Mesh.from_stl.path must be a binary STL file of 84 + 50 x {count} = "
+            f"{84 + 50 * count} bytes (its header claims {count} triangles), got {path!r} of "
+            f"{size} bytes (numpy-stl read {loaded} triangles): it is truncated or damaged"
+        )
 
 
 def _check_material(owner: str, material: Any) -> None:

@@ -30,12 +30,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import _core, parallel
+from ._validate import flag
 
 LOST_POLICIES = ("warn", "error", "ignore")
 _IDS_SHOWN = 10  # global ids named in a lost-particle report
@@ -76,8 +78,7 @@ class Guards:
                     f"got {value!r}"
                 )
             object.__setattr__(self, name, float(value))
-        if not isinstance(self.enabled, bool):
-            raise ValueError(f"Guards.enabled must be True or False, got {self.enabled!r}")
+        object.__setattr__(self, "enabled", flag("Guards", "enabled", self.enabled))
         path = self.emergency_checkpoint
         if path is not None and not isinstance(path, str | os.PathLike):
             raise ValueError(
@@ -106,6 +107,7 @@ class GuardMethods:
     _comm: Any
     _guards: Guards
     _lost_policy: str
+    _run_rayleigh_time: float
 
     if TYPE_CHECKING:
 
@@ -152,11 +154,39 @@ class GuardMethods:
         except RuntimeError as err:
             if not self._level.guard_tripped:
                 raise
-            raise RuntimeError(self._emergency_checkpoint(str(err))) from None
+            message = self._with_rayleigh_time(str(err))
+            raise RuntimeError(self._emergency_checkpoint(message)) from None
         if watch:
             lost = int(self._level.lost_particles) - lost_before
             if lost > 0:
                 self._report_lost(lost, log_start)
+
+    def _note_rayleigh_time(self) -> None:
+        """Collective, at the start of a run: the smallest Rayleigh time (s) of the particles
+        present and of those the streams may insert, for the remedy a guard's message gives.
+        The core's message takes it from the particles left when the guard trips: the particle
+        that tripped it may have left the domain by then (a sphere at 1e6 m/s), leaving none."""
+        self._run_rayleigh_time = math.inf
+        if self._guards.enabled:
+            self._run_rayleigh_time = min(
+                float(self._level.smallest_rayleigh_time()),
+                float(self._level.smallest_insertion_rayleigh_time()),
+            )
+
+    def _with_rayleigh_time(self, message: str) -> str:
+        """The guard's message with the smallest Rayleigh time of every particle of the run
+        (see _note_rayleigh_time); the same on every rank."""
+
+        def smallest(found: re.Match[str]) -> str:
+            try:
+                t_r = min(float(found.group(1)), getattr(self, "_run_rayleigh_time", math.inf))
+            except ValueError:
+                return found.group(0)
+            if math.isinf(t_r):
+                return "no particle left to give a Rayleigh time"
+            return f"smallest Rayleigh time {t_r:.6g} s"
+
+        return re.sub(r"smallest Rayleigh time (\S+) s", smallest, message, count=1)
 
     def _emergency_checkpoint(self, message: str) -> str:
         """Writes the emergency checkpoint if one was asked for; returns the error message."""

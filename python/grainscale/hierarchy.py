@@ -62,7 +62,7 @@ from typing import Any, cast
 import numpy as np
 
 from . import _core, parallel, scaling
-from ._validate import positive
+from ._validate import flag, positive
 from .coupling import Coupling, StressBoundary, rest_speed
 from .dist import Distribution
 from .levels import (
@@ -125,6 +125,7 @@ class Hierarchy:
             raise ValueError(
                 f"Hierarchy.levels must be a non-empty list of gs.Level, got {levels!r}"
             )
+        force_time_step = flag("Hierarchy", "force_time_step", force_time_step)
         self.exchange = exchange if exchange is not None else Exchange()
         if not isinstance(self.exchange, Exchange):
             raise ValueError(f"Hierarchy.exchange must be a gs.Exchange, got {exchange!r}")

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, cast
 import numpy as np
 
 from . import _core
-from ._validate import direction, non_negative, positive, vector3
+from ._validate import direction, non_negative, positive, span, vector3
 from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
 from .materials import Material
@@ -461,7 +461,16 @@ class Outlet:
         object.__setattr__(self, "every", _positive_int("Outlet", "every", self.every))
 
     def _add(self, sim: Simulation) -> OutletHandle:
-        index = sim.engine.add_outlet(_core_region(self.region, "Outlet"), self.every)
+        region = _core_region(self.region, "Outlet")
+        lo, hi = (np.asarray(b, float) for b in region.bounds())
+        domain = sim.domain
+        if not (np.all(hi >= domain.lo) and np.all(lo <= domain.hi)):
+            raise ValueError(
+                f"Outlet.region must meet the simulation domain {span(domain.lo, domain.hi)}, "
+                f"got a {type(self.region).__name__} with bounds {span(lo, hi)}, entirely "
+                "outside it: the outlet could never remove a particle"
+            )
+        index = sim.engine.add_outlet(region, self.every)
         return OutletHandle(sim.engine, index, self)
 
 

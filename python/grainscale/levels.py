@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from . import scaling
-from ._validate import non_negative, positive
+from ._validate import flag, non_negative, positive
 from .dist import Distribution, as_distribution
 from .geometry import Box, Cylinder, Mesh
 from .insert import Pack, Stream
@@ -108,6 +108,7 @@ class Exchange:
                 positive("Exchange", name, getattr(self, name))
         if self.stress_integral is not None:  # 0 with stress_gain 0: no stress condition
             non_negative("Exchange", "stress_integral", self.stress_integral)
+        flag("Exchange", "mass_flux_correction", self.mass_flux_correction)
         if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
             raise ValueError(f"Exchange.samples must be a positive integer, got {self.samples!r}")
         for name in (

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from . import _core, parallel
-from ._validate import vector3
+from ._validate import flag, span, vector3
 from .geometry import Cylinder, Mesh, Plane, Rectangle, Servo
 from .placement import check_particles
 
@@ -154,6 +154,30 @@ class WallHandle:
         return f"WallHandle(index={self.index}, {type(self.geometry).__name__})"
 
 
+def _check_in_domain(owner: str, wall: Rectangle | Mesh, domain: Any) -> None:
+    """ValueError unless the wall's bounding box meets the domain box (touching counts):
+    particles live inside the domain, so a wall wholly outside it could never be touched (a
+    mesh in mm read as m lies 1000 x too far from the origin)."""
+    if isinstance(wall, Rectangle):
+        c, e1, e2 = (np.asarray(v, float) for v in (wall.corner, wall.edge1, wall.edge2))
+        points = np.array([c, c + e1, c + e2, c + e1 + e2])
+    else:
+        points = np.asarray(wall.vertices, float)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    if np.all(hi >= domain.lo) and np.all(lo <= domain.hi):
+        return
+    hint = (
+        "; for an STL file in mm read it with Mesh.from_stl(path, scale=1e-3)"
+        if isinstance(wall, Mesh)
+        else ""
+    )
+    raise ValueError(
+        f"{owner}.wall must reach into the domain {span(domain.lo, domain.hi)}, got a "
+        f"{type(wall).__name__} with bounds {span(lo, hi)}, entirely outside the domain where "
+        f"no particle can touch it{hint}; pass check_placement=False to accept it"
+    )
+
+
 def _deprecated(old: str, new: str) -> None:
     warnings.warn(
         f"Simulation.{old} is deprecated and will be removed in the next release; use the "
@@ -195,7 +219,9 @@ class WallMethods:
             servo: optional force/stress control of the wall's translation.
             check_placement: refuse a wall that the particles present overlap by more than
                 10 % of their radius or lie behind (a mesh: overlaps only, an open mesh has no
-                behind; grainscale.placement); False accepts it.
+                behind; grainscale.placement), and a rectangle or mesh whose bounding box lies
+                entirely outside the domain (no particle can reach it: e.g. an STL file in mm
+                read without ``scale=1e-3``); False accepts them.
         """
         parallel.same_arguments(
             self.comm,
@@ -204,7 +230,19 @@ class WallMethods:
             servo=servo,
             check_placement=check_placement,
         )
-        if check_placement and isinstance(wall, WallGeometry):
+        owner = "Simulation.add_wall"
+        if not isinstance(wall, WallGeometry):
+            raise ValueError(
+                f"{owner}.wall must be a Plane, Rectangle, Cylinder or Mesh (grainscale.geometry), "
+                f"got {wall!r}"
+            )
+        if servo is not None and not isinstance(servo, Servo):
+            raise ValueError(
+                f"{owner}.servo must be a grainscale.geometry.Servo or None, got {servo!r}"
+            )
+        if flag(owner, "check_placement", check_placement):
+            if isinstance(wall, Rectangle | Mesh):
+                _check_in_domain(owner, wall, self.domain)
             self._check_new_wall(wall)
         mat = -1 if wall.material is None else self.material_index(wall.material)
         lv = self._level
@@ -222,13 +260,9 @@ class WallMethods:
                 wall.point, wall.axis, wall.radius, length, wall.inside, wall.velocity, mat
             )
             spin_origin = wall.point
-        elif isinstance(wall, Mesh):
+        else:
             k = lv.add_mesh_wall(wall.vertices, wall.triangles, wall.origin, wall.velocity, mat)
             spin_origin = wall.origin
-        else:
-            raise ValueError(
-                f"add_wall.wall must be a Plane, Rectangle, Cylinder or Mesh, got {wall!r}"
-            )
         handle = WallHandle(self, int(k), wall)
         if spin_origin is not None and any(wall.angular_velocity):
             lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, spin_origin)

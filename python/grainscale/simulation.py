@@ -6,7 +6,6 @@ steps in C++ with the GIL released, so Ctrl-C is honoured between chunks.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import time as _time
@@ -17,18 +16,19 @@ from typing import Any
 import numpy as np
 
 from . import _core, parallel
-from ._validate import id_array, positive, real_array, vector3
+from ._validate import flag, id_array, positive, real_array, vector3, whole
 from .contact import EEPA, ContactLaw, HertzMindlin, Linear
 from .engine import Engine
 from .geometry import Box, Servo
 from .guards import GuardMethods, Guards
 from .insert import Outlet, OutletHandle, Pack, Stream, StreamHandle
-from .materials import Material
+from .materials import Material, check_masses
 from .particle_view import WRITABLE_FIELDS, ParticleView
 from .placement import check_new_particles
 from .sim_checkpoint import CheckpointMethods
 from .sim_output import Output, OutputMethods
 from .sim_ranks import RankMethods
+from .sim_run import check_run_arguments, target_step
 from .sim_thermo import ThermoMethods
 from .sim_walls import WallHandle, WallMethods
 
@@ -142,7 +142,7 @@ class Simulation(
         self.contact._apply_law(self._level)
         self._interactions_for = -1  # number of materials the interaction table was built for
         self._level.set_gravity(vector3("Simulation", "gravity", gravity))
-        self._force_time_step = bool(force_time_step)
+        self._force_time_step = flag("Simulation", "force_time_step", force_time_step)
         self._time_step: float | None = None
         if time_step is not None:
             self.time_step = time_step
@@ -150,13 +150,11 @@ class Simulation(
         if skin is not None:
             self._level.set_skin(positive("Simulation", "skin", skin, " (m)"))
             self._skin_fixed = True
-        if thermo_every is not None and (int(thermo_every) != thermo_every or thermo_every <= 0):
-            raise ValueError(
-                f"Simulation.thermo_every must be a positive integer, got {thermo_every!r}"
-            )
-        self.thermo_every = None if thermo_every is None else int(thermo_every)
-        self.quiet = quiet
-        self._level.record_contacts = bool(record_contacts)
+        self.thermo_every = (
+            None if thermo_every is None else whole("Simulation", "thermo_every", thermo_every, 1)
+        )
+        self.quiet = flag("Simulation", "quiet", quiet)
+        self.record_contacts = record_contacts
         self.thermo_log: list[dict[str, float]] = []
         self._outputs: list[tuple[Output, int]] = []
         self._log_path = None  # the log file (sim.log)
@@ -290,6 +288,7 @@ class Simulation(
         if np.any(rad <= 0):
             i = int(np.argmax(rad <= 0))
             raise ValueError(f"{owner}.radius must be positive (m), got {rad[i]} at index {i}")
+        check_masses(owner, rad, material, self.dimension)
         if check_placement:
             check_new_particles(self, owner, pos, rad)
         mat = np.full(n, self.particle_material_index(material, owner), dtype=np.int32)
@@ -426,7 +425,7 @@ class Simulation(
 
     @record_contacts.setter
     def record_contacts(self, on: bool) -> None:
-        self._level.record_contacts = bool(on)
+        self._level.record_contacts = flag("Simulation", "record_contacts", on)
 
     def contacts(self) -> dict[str, np.ndarray]:
         """Touching contacts at the last step: id_i, id_j (-1 - wall index for walls),
@@ -507,10 +506,12 @@ class Simulation(
                 f"until={until!r}"
             )
         parallel.same_arguments(self._comm, "Simulation.run", steps=steps, until=until)
+        check_run_arguments(steps, until, progress)
         self.engine.check_unseen_writes()
         self._resolve_defaults()
         dt = float(self._time_step)  # type: ignore[arg-type]
         target = self._target_step(steps, until, dt)
+        self._note_rayleigh_time()
         if progress is None:
             progress = sys.stderr.isatty() and not os.environ.get("CI")
         progress = progress and self.rank == 0
@@ -553,17 +554,9 @@ class Simulation(
             self._log_thermo(print_line=False, log_line=False)
 
     def _target_step(self, steps: int | None, until: float | None, dt: float) -> int:
-        """The step a run of ``steps`` steps or up to time ``until`` ends at."""
-        if steps is not None:
-            if int(steps) != steps or steps < 0:
-                raise ValueError(
-                    f"Simulation.run.steps must be a non-negative integer, got {steps!r}"
-                )
-            return self.step + int(steps)
-        u = float(until)  # type: ignore[arg-type]
-        if not math.isfinite(u):
-            raise ValueError(f"Simulation.run.until must be finite (s), got {until!r}")
-        return self.step + max(0, math.ceil((u - self.time) / dt * (1 - 1e-12)))
+        """The step a run of ``steps`` steps or up to time ``until`` ends at (arguments checked
+        by check_run_arguments); refused beyond MAX_STEP, where the run would never end."""
+        return target_step(self.step, self.time, steps, until, dt)
 
     def _adapt_chunk(self, n: int, elapsed: float) -> None:
         """Chunks of 0.25-1 s (the size carries over to the next run): Ctrl-C and the bar stay

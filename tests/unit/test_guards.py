@@ -250,3 +250,17 @@ def test_a_wall_faster_than_the_guard_stops_the_run_before_it_starts():
     )
     drum.run(steps=2)  # 0.45 mm of surface per step, but the drum stays in place
     assert drum.step == 2
+
+
+def test_remedy_gives_the_rayleigh_time_of_a_particle_already_gone():
+    """A sphere at 1e6 m/s leaves the domain in the step that trips the guard: the Rayleigh time
+    of the remedy is its own (0.2 x it is the default step), not that of no particle (inf)."""
+    sim = gs.Simulation(domain=BOX, gravity=(0, 0, 0))
+    sim.add_particles(
+        position=[[0.01, 0.01, 0.01]], radius=1e-3, material=GLASS, velocity=(1e6, 0, 0)
+    )
+    with pytest.raises(RuntimeError) as err:
+        sim.run(steps=10, progress=False)
+    t_r = gs.timestep.rayleigh_time(GLASS, 1e-3)
+    assert sim.num_particles == 0
+    assert f"smallest Rayleigh time {t_r:.6g} s) or check" in str(err.value)

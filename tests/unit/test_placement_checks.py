@@ -179,7 +179,9 @@ def test_a_large_random_packing_is_accepted_and_one_overlap_in_it_is_found() -> 
     position = (ijk + 0.5) * spacing + rng.uniform(-0.04, 0.04, (len(k), 3)) * spacing
     radius = rng.uniform(0.6e-3, 1e-3, len(k))
     top = (k[-1] // side**2 + 1) * spacing
-    box = gs.Box(lo=(0, 0, 0), hi=(side * spacing, side * spacing, top), periodic=(1, 1, 0))
+    box = gs.Box(
+        lo=(0, 0, 0), hi=(side * spacing, side * spacing, top), periodic=(True, True, False)
+    )
     sim = gs.Simulation(domain=box)
     moved = position.copy()
     moved[5000] = moved[5001] - [0.5e-3, 0, 0]  # overlaps 5001 (and no other)

@@ -143,6 +143,76 @@ def test_stl_millimetre_cube_is_a_working_wall(tmp_path: Path) -> None:
     np.testing.assert_allclose(k.force, [0, 0, -m * 9.81], rtol=1e-6, atol=1e-15)
 
 
+def test_stl_in_millimetres_read_without_scale_is_refused(tmp_path: Path) -> None:
+    """A 10 mm box at 100-110 mm read without scale=1e-3 lies at 100-110 m: far outside."""
+    path = tmp_path / "box_mm.stl"
+    gs.geometry.Mesh(vertices=CUBE * 10 + 100, triangles=CUBE_TRIANGLES).to_stl(path)
+    sim = gs.Simulation(domain=gs.Box(lo=(0.099,) * 3, hi=(0.111,) * 3))
+    with pytest.raises(ValueError) as err:
+        sim.add_wall(gs.geometry.Mesh.from_stl(path))
+    assert str(err.value) == (
+        "Simulation.add_wall.wall must reach into the domain [(0.099, 0.099, 0.099), (0.111, "
+        "0.111, 0.111)] m, got a Mesh with bounds [(100, 100, 100), (110, 110, 110)] m, entirely "
+        "outside the domain where no particle can touch it; for an STL file in mm read it with "
+        "Mesh.from_stl(path, scale=1e-3); pass check_placement=False to accept it"
+    )
+    assert sim.walls == []
+    sim.add_wall(gs.geometry.Mesh.from_stl(path), check_placement=False)
+    sim.add_wall(gs.geometry.Mesh.from_stl(path, scale=1e-3))
+    assert len(sim.walls) == 2
+
+
+def test_rectangle_outside_the_domain_is_refused_touching_is_not() -> None:
+    sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)))
+    far = gs.Rectangle(corner=(0, 0, 0.02), edge1=(0.01, 0, 0), edge2=(0, 0.01, 0))
+    with pytest.raises(ValueError, match=r"got a Rectangle with bounds \[\(0, 0, 0.02\), "):
+        sim.add_wall(far)
+    lid = gs.Rectangle(corner=(0, 0, 0.01), edge1=(0.01, 0, 0), edge2=(0, 0.01, 0))
+    sim.add_wall(lid)  # on the domain's face
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (
+            {"wall": "floor"},
+            "Simulation.add_wall.wall must be a Plane, Rectangle, Cylinder or Mesh "
+            "(grainscale.geometry), got 'floor'",
+        ),
+        (
+            {"servo": "x"},
+            "Simulation.add_wall.servo must be a grainscale.geometry.Servo or None, got 'x'",
+        ),
+        (
+            {"check_placement": "no"},
+            "Simulation.add_wall.check_placement must be True or False, got 'no'",
+        ),
+    ],
+)
+def test_add_wall_checks_its_argument_types_first(arguments, message) -> None:
+    sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)))
+    floor = gs.Plane(point=(0, 0, 0), normal=(0, 0, 1), material=MAT)
+    with pytest.raises(ValueError) as err:
+        sim.add_wall(**({"wall": floor} | arguments))
+    assert str(err.value) == message
+    assert sim.walls == [] and sim.materials == []
+
+
+def test_outlet_outside_the_domain_is_refused() -> None:
+    sim = gs.Simulation(domain=gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01)))
+    far = gs.Box(lo=(1, 1, 1), hi=(1.02, 1.02, 1.02))
+    with pytest.raises(ValueError) as err:
+        sim.add_outlet(gs.insert.Outlet(far))
+    assert str(err.value) == (
+        "Outlet.region must meet the simulation domain [(0, 0, 0), (0.01, 0.01, 0.01)] m, got a "
+        "Box with bounds [(1, 1, 1), (1.02, 1.02, 1.02)] m, entirely outside it: the outlet "
+        "could never remove a particle"
+    )
+    assert sim.outlets == []
+    below = gs.Box(lo=(-1, -1, -1), hi=(1, 1, 0.002))  # may reach beyond the domain
+    sim.add_outlet(gs.insert.Outlet(below))
+
+
 # --------------------------------------------------------------------------------------------
 # VTK output of mesh walls
 # --------------------------------------------------------------------------------------------

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from .. import parallel
+from .._validate import flag
 from .h5snapshot import read_snapshot, snapshot_files, write_snapshot
 from .schedule import Schedule
 from .vtk import PVDSeries, write_pvtp, write_vtp_lines
@@ -178,6 +179,9 @@ class ContactNetwork:
     ) -> None:
         self._schedule = Schedule("ContactNetwork", every, every_steps)
         check_prefix("ContactNetwork", prefix)
+        for name, value in (("vtk", vtk), ("table", table), ("walls", walls), ("binary", binary),
+                            ("appended", appended), ("resume", resume)):  # fmt: skip
+            flag("ContactNetwork", name, value)
         if not (vtk or table):
             raise ValueError("ContactNetwork needs vtk=True or table=True, got both False")
         if appended and not binary:

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validate import flag
 from .particle_fields import Extra, check_extra, choose_fields, extra_arrays, field_arrays
 from .schedule import Schedule
 from .vtk import PathLike, PVDSeries, write_pvtp, write_vtp, write_vtp_mesh
@@ -103,6 +104,8 @@ class VTK:
         self.level = level
         self._schedule = Schedule("VTK", every, every_steps)
         check_prefix("VTK", prefix)
+        binary, appended = flag("VTK", "binary", binary), flag("VTK", "appended", appended)
+        resume = flag("VTK", "resume", resume)
         if appended and not binary:
             raise ValueError("VTK.appended=True requires binary=True, got binary=False")
         self.fields = choose_fields("VTK", fields, DEFAULT_FIELDS)
