@@ -156,6 +156,7 @@ def test_pvd_resume_keeps_earlier_existing_entries(tmp_path: Path) -> None:
         "grainscale.io.auto_checkpoint",
         "grainscale.io.particle_fields",
         "grainscale.sim_thermo",
+        "grainscale.sim_output",
     ],
 )
 def test_docstring_examples(module: str) -> None:
