@@ -130,6 +130,18 @@ class OutputMethods:
 
         Under MPI rank 0 writes the file (collective call; warnings of the other ranks are not
         in it).
+
+        Example:
+            >>> import os, tempfile, grainscale as gs
+            >>> path = os.path.join(tempfile.mkdtemp(), "run.log")
+            >>> box = gs.Box(lo=(0, 0, 0), hi=(0.01, 0.01, 0.01))
+            >>> sim = gs.Simulation(domain=box, thermo_every=5, quiet=True)
+            >>> glass = gs.Material(density=2500, youngs_modulus=5e7, poisson_ratio=0.3)
+            >>> _ = sim.add_particles(position=[[0.005] * 3], radius=1e-3, material=glass)
+            >>> sim.log(path)
+            >>> sim.run(steps=10, progress=False)
+            >>> [line.split()[0] for line in open(path) if not line.startswith("#")]
+            ['5', '10']
         """
         parallel.same_arguments(
             self.comm, "Simulation.log", path=None if path is None else os.fspath(path)
@@ -211,11 +223,11 @@ class OutputMethods:
                 )
 
     def _remaining_seconds(self) -> float:
-        """Estimated wall-clock seconds until the current run ends (from its rate so far;
-        NaN outside a run or before its first step)."""
+        """Estimated wall-clock seconds until the current run ends (from its rate so far);
+        0 outside a run, NaN before the run's first step."""
         clock = self._run_clock
         if clock is None:
-            return float("nan")
+            return 0.0
         start, first, target = clock
         done = self.step - first
         if done <= 0:

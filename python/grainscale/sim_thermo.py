@@ -39,7 +39,7 @@ class ThermoMethods:
         """Current thermo quantities (see ``thermo_log``): step, time (s), kinetic_energy (J),
         contacts, max_overlap_ratio (largest overlap / smaller radius), particle_steps_per_second
         (since the last entry), particles, lost, and remaining_seconds (wall-clock estimate of
-        the time left in the current run from its rate so far; NaN outside a run)."""
+        the time left in the current run from its rate so far; 0 outside a run)."""
         now = _time.perf_counter()
         t0, s0 = self._rate_clock
         rate = (self.step - s0) * self.num_particles / (now - t0) if now > t0 else 0.0

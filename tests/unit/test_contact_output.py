@@ -140,7 +140,7 @@ def test_step_without_recorded_contacts_is_skipped_after_a_restart(tmp_path: Pat
     first.output(gs.io.ContactNetwork(tmp_path / "net", every_steps=2000))
     first.run(steps=6000)
     first.checkpoint(tmp_path / "state.h5")
-    again, _ = column(n=40)
+    again, _ = column(n=40, particles=False)
     again.restart(tmp_path / "state.h5")
     network = gs.io.ContactNetwork(tmp_path / "net", every_steps=2000)
     again.output(network)

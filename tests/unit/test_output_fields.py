@@ -97,7 +97,7 @@ def test_pvd_continues_across_a_restart(tmp_path: Path) -> None:
     first.run(steps=1500)  # the run goes on past the checkpoint, then stops (say, it crashed)
     assert [e[1] for e in read_pvd(out / "particles.pvd")][-1] == "particles_00004000.vtp"
 
-    again, _ = column(n=30)
+    again, _ = column(n=30, particles=False)
     again.restart(tmp_path / "state.h5")
     again.output(gs.io.VTK(out, every_steps=1000))
     again.run(steps=2000)
@@ -111,7 +111,7 @@ def test_pvd_continues_across_a_restart(tmp_path: Path) -> None:
     walls = read_pvd(out / "particles_walls.pvd")  # a fixed floor: once per run
     assert [e[1] for e in walls] == ["particles_walls_00000000.vtp", "particles_walls_00003000.vtp"]
 
-    fresh, _ = column(n=30)  # resume=False starts a new series
+    fresh, _ = column(n=30, particles=False)  # resume=False starts a new series
     fresh.restart(tmp_path / "state.h5")
     fresh.output(gs.io.VTK(out, every_steps=1000, resume=False))
     fresh.run(steps=1000)
@@ -156,6 +156,7 @@ def test_pvd_resume_keeps_earlier_existing_entries(tmp_path: Path) -> None:
         "grainscale.io.auto_checkpoint",
         "grainscale.io.particle_fields",
         "grainscale.sim_thermo",
+        "grainscale.sim_output",
     ],
 )
 def test_docstring_examples(module: str) -> None:
