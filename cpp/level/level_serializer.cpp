@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -130,12 +131,29 @@ std::vector<GhostStage> get_ghost_stages(const LevelState& s, std::size_t n_owne
   return stages;
 }
 
-// The decomposition a state was saved under: ranks, grid, this rank, and the cut positions.
-void put_decomposition(LevelState& s, const Decomposition& d, int ranks) {
+// The decomposition a state was saved under: ranks, grid, this rank, the cut positions and the
+// automatic balancing schedule (every, threshold, last balanced step).
+void put_decomposition(LevelState& s, const Partition& p, int ranks) {
+  const Decomposition& d = p.decomposition();
   s.ints["decomposition"] = {ranks, d.grid[0], d.grid[1], d.grid[2], d.rank};
   auto& cuts = s.reals["decomposition/cuts"];
   cuts.clear();
   for (int a = 0; a < 3; ++a) cuts.insert(cuts.end(), d.cuts[a].begin(), d.cuts[a].end());
+  const Partition::BalanceSchedule b = p.balance_schedule();
+  s.ints["decomposition/balance"] = {b.every, b.balanced_at_step};
+  s.reals["decomposition/balance_threshold"] = {b.threshold};
+}
+
+// The saved balancing schedule, if the checkpoint holds one (written before it was saved: none).
+std::optional<Partition::BalanceSchedule> saved_balance_schedule(const LevelState& s) {
+  const auto ib = s.ints.find("decomposition/balance");
+  const auto rb = s.reals.find("decomposition/balance_threshold");
+  if (ib == s.ints.end() && rb == s.reals.end()) return std::nullopt;
+  if (ib == s.ints.end() || rb == s.reals.end() || ib->second.size() != 2 ||
+      rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 ||
+      !(rb->second[0] >= 1) || !std::isfinite(rb->second[0]))
+    throw std::runtime_error("checkpoint load-balancing schedule is corrupt");
+  return Partition::BalanceSchedule{ib->second[0], rb->second[0], ib->second[1]};
 }
 
 }  // namespace
@@ -181,7 +199,7 @@ LevelState LevelSerializer::save(Level& l) {
   put_ints(s, "particles/material", l.ps_.material.data(), nl);
   put_ints(s, "particles/id", l.ps_.id.data(), nl);
   put_ghost_stages(s, l.ghosts().stages());
-  put_decomposition(s, l.partition_.decomposition(), l.comm_.size());
+  put_decomposition(s, l.partition_, l.comm_.size());
   put(s, "lists/x_at_build", l.x_at_build_.data(), l.x_at_build_.size());
   put_list(s, "lists/pairs", l.contacts_.pairs);
   put_list(s, "lists/walls", l.contacts_.walls);
@@ -369,6 +387,7 @@ void LevelSerializer::validate(const Level& l, const LevelState& s, bool exact, 
   if (std::adjacent_find(ids.begin(), ids.end()) != ids.end())
     throw std::runtime_error("checkpoint holds two particles with one id");
   check_scalars(s);
+  saved_balance_schedule(s);
   saved.check_values(l.dimension_);
   saved.check_inside(l.domain_, reals(s, "scalars")[3]);
   const int stride = history_size(l.law_);
@@ -395,6 +414,7 @@ void LevelSerializer::load(Level& l, const LevelState& s) {
   l.partition_.restore(
       {static_cast<int>(dec[1]), static_cast<int>(dec[2]), static_cast<int>(dec[3])}, cuts,
       l.domain_, l.comm_);
+  if (const auto b = saved_balance_schedule(s)) l.partition_.restore_balance_schedule(*b);
   const auto& sr = reals(s, "scalars");
   l.dt_ = sr[2];
   l.skin_ = sr[3];
@@ -515,6 +535,10 @@ void LevelSerializer::load_redistributed(Level& l, const std::vector<LevelState>
   l.walls_.load_state(first);
   load_scalars(l, first, l.comm_.rank() == 0 ? lost : 0, l.comm_.rank() == 0 ? lost_mass : 0);
   l.insertion_.load_state(first);
+  // The balancing schedule carries over between parallel runs; a serial checkpoint (never
+  // balanced) leaves a parallel run its own, and a serial run does not balance.
+  if (const auto b = saved_balance_schedule(first); b && ints(first, "decomposition")[0] > 1)
+    l.partition_.restore_balance_schedule(*b);
   // The saved forces are complete (ghost shares folded in): the first step uses them; the lists
   // are built for this decomposition first, restoring the histories from the carries.
   l.lists_valid_ = false;

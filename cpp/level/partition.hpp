@@ -42,6 +42,21 @@ class Partition {
   const GhostExchange& ghosts() const { return ghosts_; }
 
   void set_auto_balance(std::int64_t every, Real threshold, std::int64_t step);
+  // The automatic balancing schedule, saved in checkpoints: a restart must rebalance at the
+  // steps the continuing run would, or the two part ways in the last bits.
+  struct BalanceSchedule {
+    std::int64_t every;
+    Real threshold;
+    std::int64_t balanced_at_step;
+  };
+  BalanceSchedule balance_schedule() const {
+    return {balance_every_, balance_threshold_, balanced_at_step_};
+  }
+  void restore_balance_schedule(const BalanceSchedule& s) {
+    balance_every_ = s.every;
+    balance_threshold_ = s.threshold;
+    balanced_at_step_ = s.balanced_at_step;
+  }
   // At a list build (parallel runs; lists invalid, histories saved, no ghosts): balances when
   // due, moves cuts a grown cut-off made too narrow, then migrates the particles with their
   // carried histories. Collective.
