@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 import grainscale as gs
+from grainscale.examples import silo_demo
 from grainscale.hierarchy import describe_balance
 
 G = 9.81
@@ -100,60 +101,11 @@ QUICK = SiloCase(
 
 
 def reference(case: SiloCase) -> tuple[gs.scaling.ParameterSet, int]:
-    """The resolved parameter set and the shutter's wall index."""
-    glass = gs.Material(
-        density=case.density,
-        youngs_modulus=case.youngs_modulus,
-        poisson_ratio=case.poisson_ratio,
-        name="glass",
-    )
-    w, d0 = case.width, case.orifice
-    box = gs.Box(lo=(0, 0, -case.below), hi=(w, w, case.height + 0.01))
-    lo, hi = 0.5 * (w - d0), 0.5 * (w + d0)
-    walls: list[Any] = [
-        gs.Plane(point=(0, 0, 0), normal=(1, 0, 0), material=glass),
-        gs.Plane(point=(w, 0, 0), normal=(-1, 0, 0), material=glass),
-        gs.Plane(point=(0, 0, 0), normal=(0, 1, 0), material=glass),
-        gs.Plane(point=(0, w, 0), normal=(0, -1, 0), material=glass),
-        # the floor: four rectangles around the orifice
-        gs.Rectangle(corner=(0, 0, 0), edge1=(lo, 0, 0), edge2=(0, w, 0), material=glass),
-        gs.Rectangle(corner=(hi, 0, 0), edge1=(w - hi, 0, 0), edge2=(0, w, 0), material=glass),
-        gs.Rectangle(corner=(lo, 0, 0), edge1=(d0, 0, 0), edge2=(0, lo, 0), material=glass),
-        gs.Rectangle(corner=(lo, hi, 0), edge1=(d0, 0, 0), edge2=(0, w - hi, 0), material=glass),
-    ]
-    gap = 0.05 * case.diameter
-    shutter = len(walls)
-    walls.append(
-        gs.Rectangle(
-            corner=(lo - case.diameter, lo - case.diameter, -gap),
-            edge1=(d0 + 2 * case.diameter, 0, 0),
-            edge2=(0, d0 + 2 * case.diameter, 0),
-            material=glass,
-        )
-    )
-    r = 0.5 * case.diameter
-    size = gs.dist.Uniform(r * (1 - case.spread), r * (1 + case.spread))
-    margin = 2 * case.diameter * 4  # room for the coarsest parcels (h = 4)
-    stream = gs.insert.Stream(
-        gs.insert.RectangleFace(
-            corner=(margin, margin, case.height),
-            edge1=(w - 2 * margin, 0, 0),
-            edge2=(0, w - 2 * margin, 0),
-        ),
-        mass_rate=case.fill_rate,
-        radius=size,
-        material=glass,
-        velocity=(0, 0, -case.pour_speed),
-        seed=case.seed,
-        stop=case.fill_mass / case.fill_rate,
-    )
-    outlet = gs.insert.Outlet(region=gs.Box(lo=(0, 0, -case.below), hi=(w, w, -0.5 * case.below)))
-    law = gs.contact.HertzMindlin(restitution=case.restitution, friction=case.friction)
-    params = gs.scaling.ParameterSet(
-        domain=box, contact=law, walls=tuple(walls), insertions=(stream,), outlets=(outlet,),
-        size=size,
-    )  # fmt: skip
-    return params, shutter
+    """The resolved parameter set and the shutter's wall index: the silo of the demo
+    (:func:`grainscale.examples.silo_demo.reference_parameters`) at this case's sizes."""
+    names = {f.name for f in dataclasses.fields(silo_demo.SiloCase)}
+    shared = {f.name: getattr(case, f.name) for f in dataclasses.fields(case) if f.name in names}
+    return silo_demo.reference_parameters(silo_demo.SiloCase(**shared)), silo_demo.SHUTTER
 
 
 def fine_region(case: SiloCase) -> gs.Box:

@@ -271,6 +271,20 @@ def write_vtp(
     )
 
 
+def _cell_indices(
+    cells: Any, corners: int, name: str, shape: str, what: str, points: Any
+) -> np.ndarray:
+    """``cells`` as an int64 (n, corners) array of point indices in [0, len(points))."""
+    c = np.asarray(cells)
+    if c.ndim != 2 or c.shape[1] != corners or (c.size and c.dtype.kind not in "iu"):
+        raise ValueError(f"{name} must be an integer array of shape {shape}, got {c.shape}")
+    n_points = np.shape(points)[0] if np.ndim(points) >= 1 else 0
+    c = c.astype(np.int64)
+    if c.size and (c.min() < 0 or c.max() >= n_points):
+        raise ValueError(f"{what} indices must be in [0, {n_points})")
+    return c
+
+
 def write_vtp_mesh(
     path: PathLike,
     vertices: Any,
@@ -290,13 +304,7 @@ def write_vtp_mesh(
         point_data: name -> (V,) or (V, k) array, one value per vertex.
         binary, appended: encoding, as in :func:`write_vtp`.
     """
-    tri = np.asarray(triangles)
-    if tri.ndim != 2 or tri.shape[1] != 3 or (tri.size and tri.dtype.kind not in "iu"):
-        raise ValueError(f"triangles must be an integer array of shape (T, 3), got {tri.shape}")
-    n_vertices = np.shape(vertices)[0] if np.ndim(vertices) >= 1 else 0
-    tri = tri.astype(np.int64)
-    if tri.size and (tri.min() < 0 or tri.max() >= n_vertices):
-        raise ValueError(f"triangle vertex indices must be in [0, {n_vertices})")
+    tri = _cell_indices(triangles, 3, "triangles", "(T, 3)", "triangle vertex", vertices)
     offsets = np.arange(1, tri.shape[0] + 1, dtype=np.int64) * 3
     _write_polydata(
         path, vertices, "Polys", tri.reshape(-1), offsets, point_data, cell_data, binary, appended
@@ -322,13 +330,7 @@ def write_vtp_lines(
         point_data: name -> (V,) or (V, k) array, one value per point.
         binary, appended: encoding, as in :func:`write_vtp`.
     """
-    seg = np.asarray(segments)
-    if seg.ndim != 2 or seg.shape[1] != 2 or (seg.size and seg.dtype.kind not in "iu"):
-        raise ValueError(f"segments must be an integer array of shape (L, 2), got {seg.shape}")
-    n_points = np.shape(points)[0] if np.ndim(points) >= 1 else 0
-    seg = seg.astype(np.int64)
-    if seg.size and (seg.min() < 0 or seg.max() >= n_points):
-        raise ValueError(f"segment point indices must be in [0, {n_points})")
+    seg = _cell_indices(segments, 2, "segments", "(L, 2)", "segment point", points)
     offsets = np.arange(1, seg.shape[0] + 1, dtype=np.int64) * 2
     _write_polydata(
         path, points, "Lines", seg.reshape(-1), offsets, point_data, cell_data, binary, appended
