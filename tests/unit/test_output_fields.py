@@ -164,10 +164,11 @@ def test_docstring_examples(module: str) -> None:
     assert result.failed == 0 and result.attempted > 0
 
 
-def test_readme_output_example_runs(tmp_path: Path) -> None:
-    """The README's Output section: its code runs (on a few particles) and reads back."""
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    section = readme.split("\n## Output\n", 1)[1]
+def test_guide_every_output_example_runs(tmp_path: Path) -> None:
+    """The Output guide's "Every output at once" block (the README's Output section until issue
+    26 moved it there): it runs on a fresh column of a few particles and reads back."""
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "output.md").read_text()
+    section = guide.split("\n## Every output at once\n", 1)[1]
     code = re.search(r"```python\n(.*?)```", section, re.S)
     assert code is not None
     set_up = (
@@ -175,8 +176,8 @@ def test_readme_output_example_runs(tmp_path: Path) -> None:
         "from output_cases import column\nsim, floor = column(n=8)\n"
     )
     check = (
-        "assert snapshots[0].time == 0.0 and len(snapshots) > 90\n"
-        "assert len(network['id_i']) > 0 and gs.io.latest_checkpoint('out/checkpoints')\n"
+        "assert snapshots[0].time == 0.0 and len(snapshots) >= 10\n"
+        "assert len(network['id_i']) > 0 and gs.io.latest_checkpoint('out/all/checkpoints')\n"
     )
     done = subprocess.run(
         [sys.executable, "-c", set_up + code.group(1) + check],
@@ -187,4 +188,4 @@ def test_readme_output_example_runs(tmp_path: Path) -> None:
         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
     )
     assert done.returncode == 0, done.stderr
-    assert len(list((tmp_path / "out" / "checkpoints").glob("*.h5"))) == 3
+    assert len(list((tmp_path / "out" / "all" / "checkpoints").glob("*.h5"))) == 3
