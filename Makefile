@@ -12,7 +12,7 @@ PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
-SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' \) 2>/dev/null) CMakeLists.txt pyproject.toml
+SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' -o -name '*.pyi' \) 2>/dev/null) CMakeLists.txt pyproject.toml
 
 .PHONY: all system-deps venv install demo test test-mpi test-cpp test-sanitize docs bench bench-cpp lint format clean
 
@@ -107,9 +107,14 @@ bench-cpp: install
 	./build/bench/bench_pair_loop
 	./build/bench/bench_neighbor_build
 
+# mypy --strict over the package and tests/typing/user_script.py (settings in pyproject.toml);
+# stubtest compares the stub of the C++ core with the installed extension.
 lint: install
 	$(VENV)/bin/ruff check python tests bench studies docs
 	$(VENV)/bin/ruff format --check python tests bench studies docs
+	$(VENV)/bin/mypy
+	$(PY) -m mypy.stubtest --mypy-config-file pyproject.toml \
+	  --allowlist tests/typing/core_stub_allowlist.txt grainscale._core
 	$(VENV)/bin/clang-format --dry-run --Werror $$(find cpp bench/cpp tests/cpp -name '*.cpp' -o -name '*.hpp')
 
 format: install

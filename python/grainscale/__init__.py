@@ -11,8 +11,9 @@ from .geometry import Box, Plane, Rectangle
 from .guards import Guards
 from .hierarchy import Exchange, Hierarchy, Level
 from .materials import Material
+from .particle_view import ParticleView
 from .sim_walls import WallHandle, WallMotion
-from .simulation import ParticleView, Simulation
+from .simulation import Simulation
 
 __version__ = "0.1.0"
 

@@ -166,7 +166,7 @@ def direction(owner: str, name: str, value: Sequence[float]) -> tuple[float, flo
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
-def vector3(owner: str, name: str, value: Sequence[float]) -> tuple[float, float, float]:
+def vector3(owner: str, name: str, value: object) -> tuple[float, float, float]:
     """Return a finite 3-vector of real numbers as a tuple of floats, else raise ValueError."""
     try:
         a = np.asarray(value)
@@ -178,10 +178,10 @@ def vector3(owner: str, name: str, value: Sequence[float]) -> tuple[float, float
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
-def span(lo: Sequence[float], hi: Sequence[float]) -> str:
+def span(lo: Sequence[float] | np.ndarray, hi: Sequence[float] | np.ndarray) -> str:
     """A box's bounds for a message: ``[(x, y, z), (x, y, z)] m``."""
 
-    def point(p: Sequence[float]) -> str:
+    def point(p: Sequence[float] | np.ndarray) -> str:
         return "(" + ", ".join(f"{float(x):.6g}" for x in p) + ")"
 
     return f"[{point(lo)}, {point(hi)}] m"

@@ -226,8 +226,8 @@ class _Law:
         """The resolved interaction properties of the pair (a, b) (None: rigid wall)."""
         values = self._law_values()
         for name in _SHARED:
-            own = [getattr(m, name, None) for m in (a, b) if m is not None]
-            own = [v for v in own if v is not None]
+            found = [getattr(m, name, None) for m in (a, b) if m is not None]
+            own: list[float] = [v for v in found if v is not None]
             if own:
                 values[name] = sum(own) / len(own)
         explicit = self.pairs.get((a, b)) or self.pairs.get((b, a))

@@ -69,7 +69,8 @@ class CellAverages:
         c = np.arange(self.cells)
         nx, ny, _ = self.dims
         ijk = np.stack([c % nx, (c // nx) % ny, c // (nx * ny)], axis=1)
-        return np.asarray(self.origin) + (ijk + 0.5) * np.asarray(self.edge)
+        centres: np.ndarray = np.asarray(self.origin) + (ijk + 0.5) * np.asarray(self.edge)
+        return centres
 
     def sample(self) -> None:
         """Adds one sample: the particles now and the contacts of the last step."""

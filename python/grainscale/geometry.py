@@ -52,7 +52,8 @@ class Box:
     def contains(self, points: np.ndarray) -> np.ndarray:
         """Boolean mask of the points inside the closed box."""
         p = np.asarray(points, dtype=float)
-        return np.all((p >= self.lo) & (p <= self.hi), axis=-1)
+        inside: np.ndarray = np.all((p >= self.lo) & (p <= self.hi), axis=-1)
+        return inside
 
     def _to_core(self, owner: str) -> _core.Region:
         """The core's region (package-internal; ``owner`` names the box in errors)."""
@@ -63,13 +64,14 @@ def _periodic(value: object) -> tuple[bool, bool, bool]:
     """Box.periodic: one bool for every axis or three bools (x, y, z); a string such as 'yes',
     a number or None is refused (it was taken for its truth value)."""
     if isinstance(value, bool | np.bool_):
-        return (bool(value),) * 3  # type: ignore[return-value]
+        return (bool(value),) * 3
     ok = isinstance(value, list | tuple | np.ndarray) and np.ndim(value) == 1 and len(value) == 3
-    if not ok or not all(isinstance(v, bool | np.bool_) for v in value):  # type: ignore[union-attr]
+    # past ``ok`` value is a list, tuple or array of three, which mypy cannot infer
+    if not ok or not all(isinstance(v, bool | np.bool_) for v in value):  # type: ignore[attr-defined]
         raise ValueError(
             f"Box.periodic must be True, False or three of them (x, y, z), got {value!r}"
         )
-    return tuple(bool(v) for v in value)  # type: ignore[return-value, union-attr]
+    return tuple(bool(v) for v in value)  # type: ignore[return-value, attr-defined]
 
 
 @dataclass(frozen=True)
@@ -184,7 +186,7 @@ class Cylinder:
         p = np.asarray(points, dtype=float) - np.asarray(self.point)
         h = p @ np.asarray(self.axis)
         rho = p - np.outer(h, self.axis)
-        inside = np.einsum("ij,ij->i", rho, rho) <= self.radius**2
+        inside: np.ndarray = np.einsum("ij,ij->i", rho, rho) <= self.radius**2
         if self.length is not None:
             inside &= (h >= 0) & (h <= self.length)
         return inside

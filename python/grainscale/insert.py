@@ -327,7 +327,8 @@ class Stream:
             n = np.asarray(self.face.normal)
         else:
             n = np.cross(self.face.edge1, self.face.edge2)
-        return n / np.linalg.norm(n)
+        unit: np.ndarray = n / np.linalg.norm(n)
+        return unit
 
     @property
     def volume_fraction(self) -> float:

@@ -280,7 +280,8 @@ def in_cells(grid: dict[str, Any], x: np.ndarray) -> np.ndarray:
     ok = np.all((f >= 0) & (f <= dims), axis=1)
     k = np.minimum(np.floor(np.where(ok[:, None], f, 0)).astype(int), dims - 1)
     cell = k[:, 0] + dims[0] * (k[:, 1] + dims[1] * k[:, 2])
-    return ok & (np.asarray(grid["inside"])[cell] > 0)
+    inside: np.ndarray = ok & (np.asarray(grid["inside"])[cell] > 0)
+    return inside
 
 
 def describe_balance(b: dict[str, Any]) -> str:

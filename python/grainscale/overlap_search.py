@@ -109,10 +109,12 @@ class Grid:
         """(m, 3) cell indices of the points ``x``."""
         with np.errstate(invalid="ignore", over="ignore"):
             i = np.floor((x - self.origin) / self.width)  # 0 on the axes not binned (width inf)
-        return np.clip(np.nan_to_num(i), 0, self.shape - 1).astype(np.int64)
+        cells: np.ndarray = np.clip(np.nan_to_num(i), 0, self.shape - 1).astype(np.int64)
+        return cells
 
     def key(self, i: np.ndarray) -> np.ndarray:
-        return i @ self.stride
+        keys: np.ndarray = i @ self.stride
+        return keys
 
     def lookup(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(start in ``order``, count) of the points in the cells of keys ``k``."""
@@ -403,7 +405,8 @@ def mesh_overlaps(
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("ij,ij->i", u, v)
+    dots: np.ndarray = np.einsum("ij,ij->i", u, v)
+    return dots
 
 
 def _distance2(p: np.ndarray, a: np.ndarray, ab: np.ndarray, ac: np.ndarray) -> np.ndarray:

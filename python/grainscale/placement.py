@@ -42,7 +42,8 @@ SHOWN = 5  # offenders named in a message
 
 def _unit(v: Any) -> np.ndarray:
     a = np.asarray(v, float)
-    return a / np.linalg.norm(a)
+    unit: np.ndarray = a / np.linalg.norm(a)
+    return unit
 
 
 def wall_offenders(

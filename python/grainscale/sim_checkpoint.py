@@ -63,12 +63,14 @@ class CheckpointMethods:
     _wall_spin: dict[int, tuple[float, float, float]]
     _walls: list[Any]  # WallHandle
     _materials: list[Material]
-    comm: Any
     engine: Any
     domain: Any
     contact: Any
 
     if TYPE_CHECKING:
+
+        @property
+        def comm(self) -> Any: ...  # Simulation's property
 
         def material_index(self, material: Material) -> int: ...
 

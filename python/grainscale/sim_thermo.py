@@ -19,13 +19,23 @@ class ThermoMethods:
     _rate_clock: tuple[float, int]
     _header_printed: bool
     thermo_log: list[dict[str, float]]
-    step: int
-    time: float
-    num_particles: int
-    lost_particles: int
-    rank: int
 
-    if TYPE_CHECKING:
+    if TYPE_CHECKING:  # Simulation's properties
+
+        @property
+        def step(self) -> int: ...
+
+        @property
+        def time(self) -> float: ...
+
+        @property
+        def num_particles(self) -> int: ...
+
+        @property
+        def lost_particles(self) -> int: ...
+
+        @property
+        def rank(self) -> int: ...
 
         def kinetic_energy(self) -> float: ...
 

@@ -196,9 +196,11 @@ class WallMethods:
     _wall_servos: dict[int, Servo]
 
     domain: Any
-    comm: Any
 
     if TYPE_CHECKING:
+
+        @property
+        def comm(self) -> Any: ...  # Simulation's property
 
         def material_index(self, material: Material) -> int: ...
 
@@ -250,6 +252,7 @@ class WallMethods:
             servo.force_for(wall)
             servo.direction_for(wall)
         spin_origin = None
+        spin = (0.0, 0.0, 0.0)  # planes and rectangles do not rotate
         if isinstance(wall, Plane):
             k = lv.add_plane_wall(wall.point, wall.normal, wall.velocity, mat)
         elif isinstance(wall, Rectangle):
@@ -259,14 +262,16 @@ class WallMethods:
             k = lv.add_cylinder_wall(
                 wall.point, wall.axis, wall.radius, length, wall.inside, wall.velocity, mat
             )
-            spin_origin = wall.point
+            spin_origin, spin = wall.point, wall.angular_velocity
         else:
-            k = lv.add_mesh_wall(wall.vertices, wall.triangles, wall.origin, wall.velocity, mat)
-            spin_origin = wall.origin
+            # Mesh.__post_init__ replaces a None origin by the centroid
+            origin: tuple[float, float, float] = wall.origin  # type: ignore[assignment]
+            k = lv.add_mesh_wall(wall.vertices, wall.triangles, origin, wall.velocity, mat)
+            spin_origin, spin = origin, wall.angular_velocity
         handle = WallHandle(self, int(k), wall)
-        if spin_origin is not None and any(wall.angular_velocity):
-            lv.set_wall_motion(k, wall.velocity, wall.angular_velocity, spin_origin)
-            self._wall_spin[int(k)] = wall.angular_velocity
+        if spin_origin is not None and any(spin):
+            lv.set_wall_motion(k, wall.velocity, spin, spin_origin)
+            self._wall_spin[int(k)] = spin
         self._walls.append(handle)
         if servo is not None:
             handle.servo = servo

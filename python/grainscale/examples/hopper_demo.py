@@ -225,7 +225,10 @@ def _box_surface(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def discharge_rate(
-    time_: np.ndarray, discharged: np.ndarray, inventory: float, window=WINDOW
+    time_: np.ndarray,
+    discharged: np.ndarray,
+    inventory: float,
+    window: tuple[float, float] = WINDOW,
 ) -> float:
     """Slope (kg/s) of the discharged mass between window[0] and window[1] of ``inventory``."""
     sel = (discharged >= window[0] * inventory) & (discharged <= window[1] * inventory)

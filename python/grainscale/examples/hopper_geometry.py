@@ -45,7 +45,9 @@ class HopperShape:
         return self.cone_height + self.bin_height
 
 
-def hopper_mesh(shape: HopperShape | None = None, material: gs.Material | None = None):
+def hopper_mesh(
+    shape: HopperShape | None = None, material: gs.Material | None = None
+) -> gs.geometry.Mesh:
     """The hopper surface as a gs.geometry.Mesh (cone + cylinder, open at both ends).
 
     Rings of ``segments`` vertices, about square quads (each split into two triangles).

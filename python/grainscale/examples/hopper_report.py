@@ -23,7 +23,8 @@ def setup_text(case: HopperCase, rig: HopperRig, stl: Path, out: Path) -> str:
         f"grainscale hopper demo: {case.particles} spheres, d = {case.diameter * mm:g} mm "
         f"+/- {case.diameter_spread:.0%} (uniform), E = {case.youngs_modulus:g} Pa, "
         f"e = {case.restitution:g}, mu = {case.friction:g}, mu_r = {case.rolling_friction:g}\n"
-        f"hopper {stl.name}: {len(rig.hopper.geometry.triangles)} triangles, outlet "
+        # the hopper wall is the Mesh that build() read from the STL file
+        f"hopper {stl.name}: {len(rig.hopper.geometry.triangles)} triangles, outlet "  # type: ignore[union-attr]
         f"{2 * geo.outlet_radius * mm:.1f} mm, top {2 * geo.top_radius * mm:.1f} mm at "
         f"{(geo.top_z - geo.outlet_z) * mm:.1f} mm; poured at {rig.pour_rate:.3g} kg/s for "
         f"{rig.pour_time:.3g} s; {case.duration:g} s in steps of {rig.sim.time_step:.3e} s; "

@@ -27,6 +27,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -117,7 +118,9 @@ def container(case: DemoCase, total_volume: float) -> tuple[gs.Box, gs.Box]:
     )
 
 
-def run(output: str | Path, case: DemoCase | None = None, progress: bool | None = None) -> dict:
+def run(
+    output: str | Path, case: DemoCase | None = None, progress: bool | None = None
+) -> dict[str, Any]:
     """Run the case, write its files into ``output`` (created if needed) and return what was
     measured: ``bed_height`` (m), ``packing_fraction``, ``kinetic_energy`` (J, peak and final),
     ``steps``, ``time_step`` (s), ``pvd`` and ``history`` (paths). ``progress``: a progress bar
@@ -168,7 +171,7 @@ def run(output: str | Path, case: DemoCase | None = None, progress: bool | None 
         comments="",
         fmt=["%.6g", "%.6e", "%d", "%.6e", "%.5f"],
     )
-    result = dict(
+    result: dict[str, Any] = dict(
         bed_height=float(hist[-1, 3]),
         packing_fraction=float(hist[-1, 4]),
         peak_kinetic_energy=float(hist[:, 1].max()),

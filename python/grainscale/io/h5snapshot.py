@@ -112,7 +112,9 @@ def _attrs(f: Any) -> dict[str, Any]:
     return out
 
 
-def read_snapshot(path: str | os.PathLike[str], fmt: str) -> tuple[dict[str, np.ndarray], dict]:
+def read_snapshot(
+    path: str | os.PathLike[str], fmt: str
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """``(arrays, attributes)`` of a snapshot file written by :func:`write_snapshot` (its pieces
     joined in rank order). ValueError naming the file when it is not one of format ``fmt`` or a
     piece is missing or differs."""

@@ -71,7 +71,7 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-PathLike = str | os.PathLike
+PathLike = str | os.PathLike[str]
 
 # numpy dtype kind+size -> VTK XML type name. bool is stored as UInt8 (VTK has no bool type).
 _VTK_TYPES: dict[np.dtype, str] = {

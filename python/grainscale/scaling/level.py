@@ -20,6 +20,8 @@ from ..materials import Material
 from .parameters import ParameterSet
 from .transform import scale
 
+_Point = Sequence[float] | np.ndarray
+
 # A region level's box reaches this many of its largest particle radii beyond the region, so
 # that particles near the region's faces have their neighbours and the walls beyond.
 REGION_MARGIN_RADII = 4.0
@@ -32,7 +34,7 @@ def level_parameters(
     h: float,
     scheme: str = "cg",
     *,
-    region: tuple[Sequence[float], Sequence[float]] | None = None,
+    region: tuple[_Point, _Point] | None = None,
     region_material: Material | None = None,
     time_step: float | None = None,
 ) -> ParameterSet:
@@ -82,7 +84,7 @@ def level_parameters(
 def _region_level(
     params: ParameterSet,
     domain: Box,
-    region: tuple[Sequence[float], Sequence[float]],
+    region: tuple[_Point, _Point],
     max_radius: float,
     material: Material | None,
 ) -> ParameterSet:
@@ -100,7 +102,7 @@ def _region_level(
         domain=Box(
             lo=tuple(np.maximum(lo - margin, dom_lo)),
             hi=tuple(np.minimum(hi + margin, dom_hi)),
-            periodic=periodic,
+            periodic=periodic,  # type: ignore[arg-type]  # Box turns numpy bools into bools
         ),
         insertions=(),
         particles=(),

@@ -156,7 +156,7 @@ class _Mapper:
     def box(self, b: Box) -> Box:
         return _replace(b, {"lo": self.length(b.lo), "hi": self.length(b.hi)})
 
-    def region(self, r: Region) -> Region:
+    def region(self, r: Region | Mesh) -> Region | Mesh:
         return self.box(r) if isinstance(r, Box) else self.wall(r)  # type: ignore[return-value]
 
     def insertion(self, op: Pack | Stream) -> Pack | Stream:
