@@ -150,8 +150,8 @@ std::optional<Partition::BalanceSchedule> saved_balance_schedule(const LevelStat
   const auto rb = s.reals.find("decomposition/balance_threshold");
   if (ib == s.ints.end() && rb == s.reals.end()) return std::nullopt;
   if (ib == s.ints.end() || rb == s.reals.end() || ib->second.size() != 2 ||
-      rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 ||
-      !(rb->second[0] >= 1) || !std::isfinite(rb->second[0]))
+      rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 || !(rb->second[0] >= 1) ||
+      !std::isfinite(rb->second[0]))
     throw std::runtime_error("checkpoint load-balancing schedule is corrupt");
   return Partition::BalanceSchedule{ib->second[0], rb->second[0], ib->second[1]};
 }
