@@ -140,14 +140,14 @@ void put_decomposition(LevelState& s, const Partition& p, int ranks) {
   cuts.clear();
   for (int a = 0; a < 3; ++a) cuts.insert(cuts.end(), d.cuts[a].begin(), d.cuts[a].end());
   const Partition::BalanceSchedule b = p.balance_schedule();
-  s.ints["decomposition/balance"] = {b.every, b.balanced_at_step};
-  s.reals["decomposition/balance_threshold"] = {b.threshold};
+  s.ints["balance_schedule"] = {b.every, b.balanced_at_step};
+  s.reals["balance_threshold"] = {b.threshold};
 }
 
 // The saved balancing schedule, if the checkpoint holds one (written before it was saved: none).
 std::optional<Partition::BalanceSchedule> saved_balance_schedule(const LevelState& s) {
-  const auto ib = s.ints.find("decomposition/balance");
-  const auto rb = s.reals.find("decomposition/balance_threshold");
+  const auto ib = s.ints.find("balance_schedule");
+  const auto rb = s.reals.find("balance_threshold");
   if (ib == s.ints.end() && rb == s.reals.end()) return std::nullopt;
   if (ib == s.ints.end() || rb == s.reals.end() || ib->second.size() != 2 ||
       rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 || !(rb->second[0] >= 1) ||
