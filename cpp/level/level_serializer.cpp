@@ -132,7 +132,8 @@ std::vector<GhostStage> get_ghost_stages(const LevelState& s, std::size_t n_owne
 }
 
 // The decomposition a state was saved under: ranks, grid, this rank, the cut positions and the
-// automatic balancing schedule (every, threshold, last balanced step).
+// automatic balancing schedule (every, threshold, last balanced step). The schedule's keys are
+// not under "decomposition/": ints "decomposition" is a dataset of the HDF5 file, not a group.
 void put_decomposition(LevelState& s, const Partition& p, int ranks) {
   const Decomposition& d = p.decomposition();
   s.ints["decomposition"] = {ranks, d.grid[0], d.grid[1], d.grid[2], d.rank};
@@ -140,18 +141,18 @@ void put_decomposition(LevelState& s, const Partition& p, int ranks) {
   cuts.clear();
   for (int a = 0; a < 3; ++a) cuts.insert(cuts.end(), d.cuts[a].begin(), d.cuts[a].end());
   const Partition::BalanceSchedule b = p.balance_schedule();
-  s.ints["decomposition/balance"] = {b.every, b.balanced_at_step};
-  s.reals["decomposition/balance_threshold"] = {b.threshold};
+  s.ints["balance/schedule"] = {b.every, b.balanced_at_step};
+  s.reals["balance/threshold"] = {b.threshold};
 }
 
 // The saved balancing schedule, if the checkpoint holds one (written before it was saved: none).
 std::optional<Partition::BalanceSchedule> saved_balance_schedule(const LevelState& s) {
-  const auto ib = s.ints.find("decomposition/balance");
-  const auto rb = s.reals.find("decomposition/balance_threshold");
+  const auto ib = s.ints.find("balance/schedule");
+  const auto rb = s.reals.find("balance/threshold");
   if (ib == s.ints.end() && rb == s.reals.end()) return std::nullopt;
   if (ib == s.ints.end() || rb == s.reals.end() || ib->second.size() != 2 ||
-      rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 ||
-      !(rb->second[0] >= 1) || !std::isfinite(rb->second[0]))
+      rb->second.size() != 1 || ib->second[0] < 0 || ib->second[1] < 0 || !(rb->second[0] >= 1) ||
+      !std::isfinite(rb->second[0]))
     throw std::runtime_error("checkpoint load-balancing schedule is corrupt");
   return Partition::BalanceSchedule{ib->second[0], rb->second[0], ib->second[1]};
 }
