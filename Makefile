@@ -6,6 +6,8 @@
 #                UndefinedBehaviorSanitizer (a separate build in build/sanitize)
 #   make bench   side-by-side benchmark against LIGGGHTS (installs it if missing)
 #   make docs    build the documentation site into build/docs (open build/docs/index.html)
+#   make wheel   the portable wheel (x86-64-v2, serial) into build/wheel-dist, installed into a
+#                fresh virtual environment (build/wheel-venv) and smoke-tested there
 
 SHELL := /bin/bash
 PYTHON ?= python3
@@ -14,7 +16,8 @@ PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' -o -name '*.pyi' \) 2>/dev/null) CMakeLists.txt pyproject.toml
 
-.PHONY: all system-deps venv install demo test test-mpi test-cpp test-sanitize docs bench bench-cpp lint format clean
+.PHONY: all system-deps venv install demo test test-mpi test-cpp test-sanitize docs wheel bench bench-cpp \
+  lint format clean
 
 # mpirun for the MPI tests and benchmarks: allowed as root (CI runs as root).
 MPIRUN := env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun
@@ -97,6 +100,34 @@ test-sanitize: install
 	rm -f $(SAN_DIR)/python/grainscale/_core*.so && cp $(SAN_DIR)/_core*.so $(SAN_DIR)/python/grainscale/
 	$(SAN_PYTHON) -c 'import grainscale._core as c; print(c.__file__); assert "/$(SAN_DIR)/" in c.__file__'
 	$(SAN_PYTHON) -m pytest -q -p no:cacheprovider $(SAN_TESTS)
+
+# The portable wheel: `python -m build --wheel` with GRAINSCALE_NATIVE=OFF (-march=x86-64-v2, so
+# it runs on any x86-64-v2 CPU) and without MPI (WHEEL_MPI=AUTO links the MPI found here), in
+# its own build directory (build/wheel/<tag>; from-source installs use build/<tag>). The check
+# refuses a compile command without -march=x86-64-v2 or with -march=native, AVX or FMA
+# instructions in the module and absolute paths of this machine in the wheel. The wheel is then installed with
+# its run-time dependencies from PyPI into a fresh virtual environment and smoke-tested from a
+# directory outside the source tree, so that the source package cannot be imported.
+WHEEL_DIST := build/wheel-dist
+WHEEL_BUILD := build/wheel
+WHEEL_VENV := build/wheel-venv
+WHEEL_MPI ?= OFF
+
+wheel: system-deps venv
+	$(PY) -m pip install --quiet build
+	rm -rf $(WHEEL_DIST)
+	GRAINSCALE_WITH_MPI=$(WHEEL_MPI) $(PY) -m build --wheel --outdir $(WHEEL_DIST) \
+	  -C cmake.define.GRAINSCALE_NATIVE=OFF -C cmake.define.CMAKE_EXPORT_COMPILE_COMMANDS=ON \
+	  -C build-dir=$(WHEEL_BUILD)/{wheel_tag}
+	$(PY) tests/smoke/wheel_check.py $(WHEEL_DIST)/grainscale-*.whl \
+	  --compile-commands $(WHEEL_BUILD)/*/compile_commands.json
+	rm -rf $(WHEEL_VENV)
+	$(PYTHON) -m venv $(WHEEL_VENV)
+	$(WHEEL_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(WHEEL_VENV)/bin/python -m pip install --quiet $(WHEEL_DIST)/grainscale-*.whl
+	smoke=$$(mktemp -d) && cd $$smoke && \
+	  $(abspath $(WHEEL_VENV))/bin/python $(abspath tests/smoke/wheel_smoke.py) --expect portable && \
+	  $(abspath $(WHEEL_VENV))/bin/grainscale info && cd / && rm -rf $$smoke
 
 bench: install
 	$(PY) bench/python/settle.py

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import functools
 import json
 import os
 import platform
@@ -83,14 +84,41 @@ def ensure_liggghts() -> str:
     return exe
 
 
-def check_grainscale() -> None:
-    probe = [sys.executable, "-c", "import grainscale, grainscale._core"]
-    proc = subprocess.run(probe, capture_output=True, text=True)
+# Prints grainscale._core.build_info() as JSON (a core older than build_info: kind unknown).
+BUILD_PROBE = (
+    "import json, grainscale._core as c; print(json.dumps(c.build_info() "
+    "if hasattr(c, 'build_info') else {'kind': 'unknown', 'instruction_sets': []}))"
+)
+
+
+@functools.cache
+def grainscale_build() -> dict[str, Any]:
+    """How the grainscale core that this interpreter imports was built: ``_core.build_info()``
+    (kind ``native`` or ``portable (x86-64-v2)``, instruction sets, MPI, compiler), asked in a
+    subprocess as the workers import it; kind ``not importable`` without grainscale."""
+    proc = subprocess.run([sys.executable, "-c", BUILD_PROBE], capture_output=True, text=True)
     if proc.returncode != 0:
+        return {"kind": "not importable", "instruction_sets": [], "error": proc.stderr.strip()}
+    return dict(json.loads(proc.stdout))
+
+
+def build_label(build: dict[str, Any]) -> str:
+    """``native: sse4.2 avx avx2 fma avx512f`` or ``portable (x86-64-v2): sse4.2``."""
+    isa = " ".join(build.get("instruction_sets", [])) or "-"
+    return f"{build['kind']}: {isa}"
+
+
+def check_grainscale() -> dict[str, Any]:
+    """Fails unless grainscale is importable; prints and returns how its core was built (the
+    benchmark notes, bench/README.md, say which build a figure is of)."""
+    build = grainscale_build()
+    if build["kind"] == "not importable":
         raise BenchmarkError(
             f"grainscale is not importable by {sys.executable} (run 'make install' first, or "
-            f"use --only liggghts):\n{proc.stderr.strip()}"
+            f"use --only liggghts):\n{build['error']}"
         )
+    print(f"grainscale build measured: {build_label(build)} ({sys.executable})", flush=True)
+    return build
 
 
 def single_thread_env() -> dict[str, str]:
@@ -130,6 +158,7 @@ def machine_info() -> dict[str, Any]:
         "platform": platform.platform(),
         "python": sys.version.split()[0],
         "omp_num_threads": 1,
+        "grainscale_build": grainscale_build(),
     }
 
 

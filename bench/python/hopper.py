@@ -50,9 +50,11 @@ from bench_common import (
     CODES,
     BenchmarkError,
     add_spring_rotation_option,
+    build_label,
     check_grainscale,
     ensure_liggghts,
     failure,
+    grainscale_build,
     paired_ratios,
     run_grainscale_worker,
     run_liggghts_log,
@@ -261,6 +263,7 @@ def bench_size(
         "timestamp": stamp,
         "case": case.to_dict(),
         "repeats": repeats,
+        "grainscale_build": grainscale_build() if "grainscale" in codes else None,
         "liggghts_setup_cpu_seconds": setup_cpu,
         "grainscale_deletion": deletion,
         "runs": [dataclasses.asdict(r) for r in mine],
@@ -364,6 +367,8 @@ def print_table(entry: dict[str, Any]) -> None:
         f"\nN = {case['n_particles']}  ({case['n_triangles']} triangles, {case['steps']} steps, "
         f"{entry['repeats']} round(s), grainscale deletion: {entry['grainscale_deletion']})"
     )
+    if entry.get("grainscale_build"):
+        print(f"  grainscale build: {build_label(entry['grainscale_build'])}")
     print(
         f"  {'code':<11s} {'ns/p-step':>10s} {'min':>8s} {'max':>8s} {'peak RSS':>10s} "
         f"{'mean N':>9s} {'left':>7s} {'disch. g':>9s} {'mean z mm':>10s} {'KE J':>10s} "

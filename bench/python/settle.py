@@ -22,7 +22,8 @@ cross-check of identical physics. Raw numbers go to bench/results/settle.json (e
 sizes already in that file are kept).
 
 LIGGGHTS is installed with apt-get if missing. The Debian build targets generic x86-64 (no AVX);
-keep that in mind when comparing with a grainscale build tuned for the machine.
+keep that in mind when comparing with a grainscale build tuned for the machine. The script prints
+which grainscale build it measured (native or portable, bench/README.md) and records it.
 
 Usage: python bench/python/settle.py [--sizes 10000 50000 200000] [--steps 4000] [--repeats 3]
                                      [--only grainscale|liggghts]
@@ -44,8 +45,10 @@ from bench_common import (
     CODES,
     BenchmarkError,
     add_spring_rotation_option,
+    build_label,
     check_grainscale,
     ensure_liggghts,
+    grainscale_build,
     paired_ratios,
     run_grainscale_worker,
     run_liggghts_log,
@@ -173,6 +176,7 @@ def bench_size(
         "timestamp": stamp,
         "case": case.to_dict(),
         "repeats": repeats,
+        "grainscale_build": grainscale_build() if "grainscale" in codes else None,
         "runs": [dataclasses.asdict(r) | {"ke_final": r.ke_final} for r in mine],
         "summary": summarize(mine),
     }
@@ -219,6 +223,8 @@ def print_table(entry: dict[str, Any]) -> None:
         f"\nN = {case['n_particles']}  (box {case['n_side']} x {case['n_side']} sites, "
         f"{case['n_layers']} layers, {case['steps']} steps, {entry['repeats']} round(s))"
     )
+    if entry.get("grainscale_build"):
+        print(f"  grainscale build: {build_label(entry['grainscale_build'])}")
     print(
         f"  {'code':<11s} {'ns/p-step':>10s} {'min':>8s} {'max':>8s} {'peak RSS':>10s} "
         f"{'KE final [J]':>13s} {'(rot)':>10s} {'mean z [mm]':>12s}"

@@ -132,7 +132,8 @@ std::vector<GhostStage> get_ghost_stages(const LevelState& s, std::size_t n_owne
 }
 
 // The decomposition a state was saved under: ranks, grid, this rank, the cut positions and the
-// automatic balancing schedule (every, threshold, last balanced step).
+// automatic balancing schedule (every, threshold, last balanced step). The schedule's keys are
+// not under "decomposition/": ints "decomposition" is a dataset of the HDF5 file, not a group.
 void put_decomposition(LevelState& s, const Partition& p, int ranks) {
   const Decomposition& d = p.decomposition();
   s.ints["decomposition"] = {ranks, d.grid[0], d.grid[1], d.grid[2], d.rank};

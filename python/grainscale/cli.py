@@ -9,7 +9,7 @@
 orifice jams coarse graining: pure CG and a multi-level hierarchy against a resolved
 reference), with the same options; ``hopper`` the hopper example,
 :mod:`grainscale.examples.hopper_demo`; ``info`` prints the version and how the C++ core was
-built.
+built (native or portable, serial or MPI).
 """
 
 from __future__ import annotations
@@ -27,6 +27,16 @@ def mpi_build() -> bool:
     return bool(_core.with_mpi())
 
 
+def build_summary() -> str:
+    """How the C++ core was built, in one line: ``native`` (``-march=native``, tuned for the
+    machine that compiled it) or ``portable (x86-64-v2)`` (the wheel), with the vector
+    instruction sets the compiled code uses, e.g. ``portable (x86-64-v2): sse4.2``."""
+    from . import _core
+
+    info = _core.build_info()
+    return f"{info['kind']}: {' '.join(info['instruction_sets']) or 'baseline instructions'}"
+
+
 def info_lines() -> list[str]:
     """What ``grainscale info`` prints, one entry per line."""
     import numpy as np
@@ -34,9 +44,11 @@ def info_lines() -> list[str]:
     from . import __version__, _core
 
     mpi = mpi_build()
+    info = _core.build_info()
     return [
         f"grainscale {__version__}",
         f"core: {_core.__file__}",
+        f"build: {build_summary()}; {info['build_type']}, {info['compiler']}",
         f"parallel: {'built with MPI' if mpi else 'serial build'}",
         f"python {platform.python_version()}, numpy {np.__version__}, {platform.platform()}",
     ]
@@ -76,7 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="grainscale", description="grainscale: discrete element method for granular media."
     )
-    parser.add_argument("--version", action="version", version=f"grainscale {__version__}")
+    parser.add_argument(
+        "--version", action="version", version=f"grainscale {__version__} ({build_summary()})"
+    )
     sub = parser.add_subparsers(dest="command", metavar="command")
     sub.required = True
     demo = sub.add_parser(

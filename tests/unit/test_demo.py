@@ -93,6 +93,24 @@ def test_cli_info(capsys: pytest.CaptureFixture[str]) -> None:
     text = capsys.readouterr().out
     assert f"grainscale {gs.__version__}" in text
     assert ("serial build" in text) or ("built with MPI" in text)
+    assert ("build: native: " in text) or ("build: portable (" in text)
+
+
+def test_build_info_says_native_or_portable(capsys: pytest.CaptureFixture[str]) -> None:
+    """``_core.build_info()``: native (-march=native) or portable (x86-64-v2 on x86-64, no AVX);
+    ``grainscale --version`` names it."""
+    from grainscale import _core
+
+    info = _core.build_info()
+    assert info["mpi"] == _core.with_mpi()
+    if info["native"]:
+        assert (info["kind"], info["arch"]) == ("native", "native")
+    else:
+        assert info["kind"] == f"portable ({info['arch']})"
+        assert not {"avx", "avx2", "fma", "avx512f"} & set(info["instruction_sets"])
+    with pytest.raises(SystemExit):
+        cli.main(["--version"])
+    assert capsys.readouterr().out.strip() == f"grainscale {gs.__version__} ({cli.build_summary()})"
 
 
 def test_cli_demo_is_the_silo_demo_and_hopper_the_hopper() -> None:
