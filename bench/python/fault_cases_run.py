@@ -50,6 +50,25 @@ run_case("run_steps_and_until", "run(steps=10, until=0.1)", {"steps": 10, "until
 run_case("run_nothing", "run() with neither steps nor until", {}, "steps", "until")
 
 
+run_case("run_until_past", "run(until=-1.0) from t = 0", {"until": -1.0}, "until", "-1.0")
+
+
+@case(R, "time_stp", types=("AttributeError",))
+def setting_misspelt(t: Probe) -> None:
+    """sim.time_stp = 1e-6: a misspelt setting stored as a new attribute and never read"""
+    s = one()
+    with t.fault():
+        s.time_stp = 1e-6  # type: ignore[attr-defined]
+
+
+@case(R, "contact", "fixed", types=("AttributeError",))
+def contact_reassigned(t: Probe) -> None:
+    """sim.contact = another law after construction: the core keeps the first one"""
+    s = one()
+    with t.fault():
+        s.contact = gs.contact.HertzMindlin(friction=0.1)
+
+
 @case(R, "steps", "9223372036854775808")
 def run_steps_beyond_int64(t: Probe) -> None:
     """run(steps=2**63): more steps than the int64 step counter holds"""

@@ -83,12 +83,13 @@ from .levels import (
 )
 from .materials import Material
 from .simulation import Simulation
+from .strict_attributes import StrictAttributes
 from .timestep import rayleigh_time
 
 __all__ = ["Exchange", "Hierarchy", "Level", "describe_balance", "in_cells"]
 
 
-class Hierarchy:
+class Hierarchy(StrictAttributes):
     """Levels of one material at several resolutions, coupled by volume-averaged fields, with
     the mass of the material conserved across the levels.
 
@@ -156,6 +157,7 @@ class Hierarchy:
         self.intervals = 0
         self._cell_output: dict[str, Any] | None = None
         self.initial_mass = sum(self._held())
+        self._freeze_attributes()
 
     # ------------------------------------------------------------------ set-up
     def _build_levels(
@@ -409,6 +411,11 @@ class Hierarchy:
             u = float(until)  # type: ignore[arg-type]
             if not math.isfinite(u):
                 raise ValueError(f"Hierarchy.run.until must be finite (s), got {until!r}")
+            if u < self.time - self.every:  # an interval short of now: rounding
+                raise ValueError(
+                    f"Hierarchy.run.until must not lie before the current time t = "
+                    f"{self.time:.9g} s (a run goes forward), got {until!r} s"
+                )
             intervals = max(0, math.ceil((u - self.time) / self.every * (1 - 1e-9)))
         if isinstance(intervals, bool) or int(intervals) != intervals or intervals < 0:
             raise ValueError(

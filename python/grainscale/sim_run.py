@@ -9,7 +9,9 @@ step counter) is refused: it could never end (``steps=2**63``, ``until=1e300``).
 from __future__ import annotations
 
 import math
+from typing import Any
 
+from . import parallel
 from ._validate import finite, flag, whole
 
 MAX_STEP = 2**62
@@ -38,6 +40,11 @@ def target_step(step: int, time: float, steps: object, until: object, dt: float)
             )
         return target
     u = finite(OWNER, "until", until, " (s)")
+    if u < time - dt:  # up to a step short of now: rounding of a time the caller computed
+        raise ValueError(
+            f"{OWNER}.until must not lie before the current time t = {time:.9g} s (a run goes "
+            f"forward), got {until!r} s"
+        )
     n = (u - time) / dt * (1 - 1e-12)
     if n > MAX_STEP - step:
         raise ValueError(
@@ -45,3 +52,18 @@ def target_step(step: int, time: float, steps: object, until: object, dt: float)
             f"got {until!r} s: {n:.3g} steps of {dt:.6g} s from t = {time:.6g} s"
         )
     return step + max(0, math.ceil(n))
+
+
+def next_chunk(chunk: int, n: int, elapsed: float, comm: Any) -> int:
+    """Steps per C++ call after a chunk of ``n`` steps took ``elapsed`` s: chunks of 0.25-1 s
+    (the size carries over to the next run) keep Ctrl-C and the bar responsive and spread the
+    cost of a chunk boundary (statistics, a separate closing kick) over many steps. Under MPI
+    every rank must take the same chunks: rank 0's timing decides."""
+    if comm is not None:
+        with parallel.waiting("Simulation.run (chunk size from rank 0)"):
+            elapsed = comm.bcast(elapsed, root=0)
+    if elapsed < 0.25 and n == chunk:
+        return min(2 * chunk, 100000)
+    if elapsed > 1.0 and chunk > 1:
+        return chunk // 2
+    return chunk

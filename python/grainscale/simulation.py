@@ -28,13 +28,20 @@ from .placement import check_new_particles
 from .sim_checkpoint import CheckpointMethods
 from .sim_output import Output, OutputMethods
 from .sim_ranks import RankMethods
-from .sim_run import check_run_arguments, target_step
+from .sim_run import check_run_arguments, next_chunk, target_step
 from .sim_thermo import ThermoMethods
 from .sim_walls import WallHandle, WallMethods
+from .strict_attributes import StrictAttributes
 
 
 class Simulation(
-    WallMethods, RankMethods, CheckpointMethods, GuardMethods, ThermoMethods, OutputMethods
+    WallMethods,
+    RankMethods,
+    CheckpointMethods,
+    GuardMethods,
+    ThermoMethods,
+    OutputMethods,
+    StrictAttributes,
 ):
     """A DEM simulation of spheres in a box, with walls and one contact law.
 
@@ -141,7 +148,8 @@ class Simulation(
             )
         self.contact._apply_law(self._level)
         self._interactions_for = -1  # number of materials the interaction table was built for
-        self._level.set_gravity(vector3("Simulation", "gravity", gravity))
+        self._gravity = vector3("Simulation", "gravity", gravity)
+        self._level.set_gravity(self._gravity)
         self._force_time_step = flag("Simulation", "force_time_step", force_time_step)
         self._time_step: float | None = None
         if time_step is not None:
@@ -167,8 +175,23 @@ class Simulation(
         self._chunk = 1  # steps per C++ call in run(), adapted to the step cost
         self._streams: list[StreamHandle] = []  # insertion and outlets
         self._outlets: list[OutletHandle] = []
+        self._fixed_after_construction = ("domain", "contact", "engine")
+        self._freeze_attributes()
 
     # ----------------------------------------------------------------- configuration
+    @property
+    def gravity(self) -> tuple[float, float, float]:
+        """Gravitational acceleration (m/s^2); a new value acts from the next step (part of
+        the set-up: a checkpoint does not hold it)."""
+        return self._gravity
+
+    @gravity.setter
+    def gravity(self, value: Sequence[float]) -> None:
+        parallel.same_arguments(self._comm, "Simulation.gravity", value=value)
+        g = vector3("Simulation", "gravity", value)
+        self._level.set_gravity(g)
+        self._gravity = g
+
     @property
     def dimension(self) -> int:
         """3 (spheres) or 2 (discs in the plane z = plane_z)."""
@@ -540,7 +563,7 @@ class Simulation(
                 stats = n == stop - self.step
                 t0 = _time.perf_counter()
                 self._run_chunk(n, stats)
-                self._adapt_chunk(n, _time.perf_counter() - t0)
+                self._chunk = next_chunk(self._chunk, n, _time.perf_counter() - t0, self._comm)
                 if bar is not None:
                     bar.update(n)
                 # Outputs, then thermo (its reductions are collective): each step agreed on.
@@ -557,19 +580,6 @@ class Simulation(
         """The step a run of ``steps`` steps or up to time ``until`` ends at (arguments checked
         by check_run_arguments); refused beyond MAX_STEP, where the run would never end."""
         return target_step(self.step, self.time, steps, until, dt)
-
-    def _adapt_chunk(self, n: int, elapsed: float) -> None:
-        """Chunks of 0.25-1 s (the size carries over to the next run): Ctrl-C and the bar stay
-        responsive, and the cost of a chunk boundary (statistics, a separate closing kick) is
-        spread over many steps. Under MPI every rank must take the same chunks: rank 0's timing
-        decides."""
-        if self._comm is not None:
-            with parallel.waiting("Simulation.run (chunk size from rank 0)"):
-                elapsed = self._comm.bcast(elapsed, root=0)
-        if elapsed < 0.25 and n == self._chunk:
-            self._chunk = min(2 * self._chunk, 100000)
-        elif elapsed > 1.0 and self._chunk > 1:
-            self._chunk //= 2
 
     def _python_step(self, work: Any) -> None:
         """Runs one Python part between chunks; an error on one rank is raised on all (a part
