@@ -5,6 +5,7 @@
 #   make test-sanitize  the C++ tests and a reduced Python suite under AddressSanitizer and
 #                UndefinedBehaviorSanitizer (a separate build in build/sanitize)
 #   make bench   side-by-side benchmark against LIGGGHTS (installs it if missing)
+#   make bench-dense  dense-bed benchmark against LIGGGHTS (a settled bed, 2000 timed steps)
 #   make docs    build the documentation site into build/docs (open build/docs/index.html)
 #   make wheel   the portable wheel (x86-64-v2, serial) into build/wheel-dist, installed into a
 #                fresh virtual environment (build/wheel-venv) and smoke-tested there
@@ -16,7 +17,7 @@ PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 SOURCES := $(shell find cpp python -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' -o -name '*.pyi' \) 2>/dev/null) CMakeLists.txt pyproject.toml
 
-.PHONY: all system-deps venv install demo test test-mpi test-cpp test-sanitize docs wheel bench bench-cpp \
+.PHONY: all system-deps venv install demo test test-mpi test-cpp test-sanitize docs wheel bench bench-dense bench-cpp \
   lint format clean
 
 # mpirun for the MPI tests and benchmarks: allowed as root (CI runs as root).
@@ -132,11 +133,15 @@ wheel: system-deps venv
 bench: install
 	$(PY) bench/python/settle.py
 
+bench-dense: install
+	$(PY) bench/python/dense_bed.py
+
 bench-cpp: install
 	$(VENV)/bin/cmake -S . -B build/bench -DGRAINSCALE_BUILD_BENCH=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
 	$(VENV)/bin/cmake --build build/bench -j2
 	./build/bench/bench_pair_loop
 	./build/bench/bench_neighbor_build
+	./build/bench/bench_roofline
 
 # mypy --strict over the package and tests/typing/user_script.py (settings in pyproject.toml);
 # stubtest compares the stub of the C++ core with the installed extension.

@@ -1,5 +1,6 @@
 // Shared helpers of the C++ microbenchmarks: wall-clock timing (median of repetitions),
-// seeded lattice packings, ParticleStore set-up and command-line scaling of N.
+// seeded lattice packings, ParticleStore set-up, the static packing of the force-loop figures,
+// the interaction of the per-law figures and command-line scaling of N.
 #pragma once
 
 #include <algorithm>
@@ -13,8 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "contact/interaction.hpp"
 #include "core/types.hpp"
 #include "neighbor/cell_grid.hpp"
+#include "neighbor/neighbor_list.hpp"
 #include "state/particle_store.hpp"
 
 namespace bench {
@@ -130,6 +133,58 @@ inline Real max_radius(const grainscale::ParticleStore& ps) {
   Real r = 0;
   for (Index i = 0; i < ps.n_owned(); ++i) r = std::max(r, ps.radius[i]);
   return r;
+}
+
+// A static packing of d = 2 mm glass-like spheres (rho = 2500 kg/m^3) and its half list, whose
+// history is sized for `history_stride` values per entry: a simple-cubic lattice of spacing
+// `spacing` d with seeded uniform jitter of +-`jitter` d per coordinate, seeded random
+// velocities (+-1 mm/s) and spins (+-1 rad/s), list built with a skin of 0.1 d, in cell order
+// as in a Level. Defaults: the packing of bench_pair_loop (spacing 0.995 d, jitter 0.01 d).
+struct Packing {
+  grainscale::ParticleStore ps;
+  grainscale::ContactList list;
+};
+
+constexpr Real kPackingDiameter = 2e-3;
+constexpr Real kPackingDensity = 2500;
+
+inline void make_packing(Index n, int history_stride, Packing& p, Real spacing = 0.995,
+                         Real jitter = 0.01) {
+  const Real d = kPackingDiameter, r = 0.5 * d, skin = 0.1 * d;
+  std::vector<Vec3> x = lattice(n, spacing * d, spacing * d, jitter * d, 7);
+  std::vector<Vec3> v(n), w(n);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (Index i = 0; i < n; ++i) {
+    v[i] = 1e-3 * Vec3(u(rng), u(rng), u(rng));
+    w[i] = Vec3(u(rng), u(rng), u(rng));
+  }
+  fill_store(p.ps, x, std::vector<Real>(n, r), kPackingDensity, &v, &w);
+  spatial_sort(p.ps, d + skin);
+  grainscale::CellGrid grid;
+  grid.build(p.ps.position.data(), p.ps.n_local(), d + skin, 2 * static_cast<std::size_t>(n) + 64);
+  p.list.history_stride = history_stride;
+  grainscale::build_pair_list(p.ps, grid, d + skin, skin, p.list);
+}
+
+// The interaction of the per-law figures; each normal model reads its own fields: e = 0.5,
+// mu = 0.5, mu_r = 0.1, eta_r = 0.3; linear k_n derived from v_c = 1 m/s; EEPA n = 1, derived
+// k1, k2/k1 = 3, k_adh = 50 N/m, f0 = -1e-4 N.
+inline grainscale::Interaction law_interaction() {
+  grainscale::Interaction in;
+  in.restitution = 0.5;
+  in.friction = 0.5;
+  in.rolling_friction = 0.1;
+  in.rolling_damping = 0.3;
+  in.normal_stiffness = 0;  // linear: derived from E*, R*, m* and v_c
+  in.characteristic_velocity = 1;
+  in.eepa_exponent = 1;
+  in.loading_stiffness = 0;  // EEPA: k1 = 2 E* R*
+  in.unloading_ratio = 3;
+  in.adhesive_stiffness = 50;  // N/m
+  in.pull_off_force = -1e-4;   // N
+  in.adhesion_exponent = 1;
+  return in;
 }
 
 // One result line: "name: value unit (N=..., reps=..., cpu=..., min=...[, extra])". `value` is

@@ -91,36 +91,11 @@ void zero_forces(grainscale::ParticleStore& ps) {
   }
 }
 
-// The static packing of the force-loop figures (see 1. above) and its half list, whose history
-// is sized for `history_stride` values per entry.
-struct Packing {
-  grainscale::ParticleStore ps;
-  grainscale::ContactList list;
-};
-
-void make_packing(Index n, int history_stride, Packing& p) {
-  const Real d = kDiameter, r = 0.5 * d, skin = 0.1 * d;
-  std::vector<Vec3> x = bench::lattice(n, 0.995 * d, 0.995 * d, 0.01 * d, 7);
-  std::vector<Vec3> v(n), w(n);
-  std::mt19937_64 rng(11);
-  std::uniform_real_distribution<Real> u(-1, 1);
-  for (Index i = 0; i < n; ++i) {
-    v[i] = 1e-3 * Vec3(u(rng), u(rng), u(rng));
-    w[i] = Vec3(u(rng), u(rng), u(rng));
-  }
-  bench::fill_store(p.ps, x, std::vector<Real>(n, r), kDensity, &v, &w);
-  bench::spatial_sort(p.ps, d + skin);
-  grainscale::CellGrid grid;
-  grid.build(p.ps.position.data(), p.ps.n_local(), d + skin, 2 * static_cast<std::size_t>(n) + 64);
-  p.list.history_stride = history_stride;
-  grainscale::build_pair_list(p.ps, grid, d + skin, skin, p.list);
-}
-
 void bench_force_loop(Index n, grainscale::TangentialHistory history, const std::string& name,
                       int reps) {
   const Real dt = 1e-5;
-  Packing packing;
-  make_packing(n, HertzMindlin::kHistorySize, packing);
+  bench::Packing packing;
+  bench::make_packing(n, HertzMindlin::kHistorySize, packing);
   grainscale::ParticleStore& ps = packing.ps;
   grainscale::ContactList& list = packing.list;
 
@@ -181,26 +156,8 @@ constexpr int kWarmupCalls = 10;
 constexpr Real kWarmupDtFactor = 20;  // warm-up dt / timed dt
 constexpr double kTargetRatio = 1.5;  // EEPA and EPSD laws: at most 1.5 x hertz+none
 
-// The interaction of the per-law figure; each normal model reads its own fields.
-grainscale::Interaction law_interaction() {
-  grainscale::Interaction in;
-  in.restitution = 0.5;
-  in.friction = 0.5;
-  in.rolling_friction = 0.1;
-  in.rolling_damping = 0.3;
-  in.normal_stiffness = 0;  // linear: derived from E*, R*, m* and v_c
-  in.characteristic_velocity = 1;
-  in.eepa_exponent = 1;
-  in.loading_stiffness = 0;  // EEPA: k1 = 2 E* R*
-  in.unloading_ratio = 3;
-  in.adhesive_stiffness = 50;  // N/m
-  in.pull_off_force = -1e-4;   // N
-  in.adhesion_exponent = 1;
-  return in;
-}
-
 // Overlap of every list entry (<= 0: not touching).
-std::vector<Real> entry_overlaps(const Packing& p) {
+std::vector<Real> entry_overlaps(const bench::Packing& p) {
   const grainscale::ParticleStore& ps = p.ps;
   const grainscale::ContactList& list = p.list;
   std::vector<Real> overlap(list.size(), 0);
@@ -244,13 +201,13 @@ class LawCase {
 template <class Law>
 class LawCaseFor final : public LawCase {
  public:
-  LawCaseFor(Packing& p, const grainscale::MaterialTable& materials, const std::vector<Real>& d_max,
-             Real dt)
+  LawCaseFor(bench::Packing& p, const grainscale::MaterialTable& materials,
+             const std::vector<Real>& d_max, Real dt)
       : p_(p), law_(grainscale::ContactSettings{}), dt_(dt) {
     constexpr int S = Law::kHistorySize;
     const std::size_t stride = materials.n_materials() + 1;
     law_.prepare(materials,
-                 std::vector<grainscale::Interaction>(stride * stride, law_interaction()));
+                 std::vector<grainscale::Interaction>(stride * stride, bench::law_interaction()));
     grainscale::ContactList& list = p.list;
     list.history_stride = S;
     list.history.assign(list.size() * S, 0);
@@ -293,7 +250,7 @@ class LawCaseFor final : public LawCase {
   }
 
  private:
-  Packing& p_;
+  bench::Packing& p_;
   Law law_;
   Real dt_;
   std::vector<Real> history_;
@@ -303,7 +260,7 @@ class LawCaseFor final : public LawCase {
 
 // One LawCase per alternative of ContactLaw, in registry order.
 template <std::size_t... I>
-std::vector<std::unique_ptr<LawCase>> make_law_cases(std::index_sequence<I...>, Packing& p,
+std::vector<std::unique_ptr<LawCase>> make_law_cases(std::index_sequence<I...>, bench::Packing& p,
                                                      const grainscale::MaterialTable& materials,
                                                      const std::vector<Real>& d_max, Real dt) {
   std::vector<std::unique_ptr<LawCase>> cases;
@@ -325,8 +282,8 @@ bool target_law(const std::string& name) {
 void bench_laws(Index n, int rounds) {
   const auto start = std::chrono::steady_clock::now();
   const Real dt = 1e-5;
-  Packing packing;
-  make_packing(n, 0, packing);
+  bench::Packing packing;
+  bench::make_packing(n, 0, packing);
   grainscale::MaterialTable materials;
   materials.add(kGlass);
   const std::vector<Real> overlap = entry_overlaps(packing);
@@ -338,7 +295,7 @@ void bench_laws(Index n, int rounds) {
   // State of the seeded EEPA contacts: at d_max (virgin loading), or below it on the unloading
   // line or the adhesive branch (n = 1; the formulas of EEPANormal::evaluate). At d = d_max
   // the loading and unloading forces agree to rounding, so the law may take either branch.
-  const grainscale::Interaction in = law_interaction();
+  const grainscale::Interaction in = bench::law_interaction();
   const Real r = 0.5 * kDiameter;
   const Real k1 = 2 * materials.pair_moduli(0, 0).effective_youngs * (r * r / (r + r));
   const Real k2 = in.unloading_ratio * k1;

@@ -3,7 +3,8 @@ LIGGGHTS, running a code in its own measured subprocess, reading a LIGGGHTS log,
 round-robin driver and the results file.
 
 Each code runs in a temporary directory of its own so that its peak RSS (``ru_maxrss`` from
-``os.wait4``) and CPU time are measured alone; the codes alternate for several rounds because
+``os.wait4``, or its own high-water mark where that is the driver's: see run_measured) and CPU
+time are measured alone; the codes alternate for several rounds because
 the machine is shared and noisy.
 """
 
@@ -16,10 +17,12 @@ import json
 import os
 import platform
 import re
+import resource
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -166,14 +169,42 @@ def machine_info() -> dict[str, Any]:
 # running one code
 
 
-def run_measured(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, int, float]:
+def run_measured(
+    cmd: list[str], cwd: Path, env: dict[str, str], single_process: bool = True
+) -> tuple[int, int, float]:
     """Run ``cmd`` with stdout/stderr to files in ``cwd``; return (exit code, peak RSS in KiB,
-    CPU seconds (user + system) of the process)."""
+    CPU seconds (user + system) of the process).
+
+    On Linux a child's ``ru_maxrss`` is never below the peak RSS its parent had when it was
+    started (exec keeps the high-water mark of the memory it replaces), so on its own it cannot
+    show a child smaller than this driver. For one process (``single_process``; not mpirun) the
+    child's own high-water mark (VmHWM of /proc/<pid>/status, polled every 20 ms) is taken
+    where ``ru_maxrss`` does not exceed the driver's peak; above it, ``ru_maxrss`` is exact."""
+    hwm = 0
     with (cwd / "stdout.txt").open("wb") as out, (cwd / "stderr.txt").open("wb") as err:
         proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=out, stderr=err)
-        _, status, usage = os.wait4(proc.pid, 0)
+        while True:
+            pid, status, usage = os.wait4(proc.pid, os.WNOHANG if single_process else 0)
+            if pid != 0:
+                break
+            hwm = max(hwm, _vm_hwm_kib(proc.pid))
+            time.sleep(0.02)
         proc.returncode = os.waitstatus_to_exitcode(status)
-    return proc.returncode, int(usage.ru_maxrss), usage.ru_utime + usage.ru_stime  # KiB on Linux
+    rss = int(usage.ru_maxrss)  # KiB on Linux
+    if single_process and hwm > 0 and rss <= resource.getrusage(resource.RUSAGE_SELF).ru_maxrss:
+        rss = hwm
+    return proc.returncode, rss, usage.ru_utime + usage.ru_stime
+
+
+def _vm_hwm_kib(pid: int) -> int:
+    """VmHWM (peak RSS of the current program) of a running process, 0 if unavailable."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0
 
 
 def _tail(path: Path, lines: int = 25) -> str:
@@ -198,7 +229,7 @@ def run_liggghts_log(
     try:
         load = os.getloadavg()[0]
         cmd = [*launcher(ranks), exe, "-in", f"../{script}", "-log", log_name]
-        rc, rss, cpu = run_measured(cmd, rundir, single_thread_env())
+        rc, rss, cpu = run_measured(cmd, rundir, single_thread_env(), ranks == 1)
         if rc != 0:
             raise failure("liggghts", rc, rundir, log_name, "stdout.txt", "stderr.txt")
         text = (rundir / log_name).read_text(errors="replace")
@@ -222,7 +253,7 @@ def run_grainscale_worker(
     try:
         load = os.getloadavg()[0]
         cmd = [*launcher(ranks), sys.executable, str(worker), *options, "--output", "result.json"]
-        rc, rss, _ = run_measured(cmd, rundir, single_thread_env())
+        rc, rss, _ = run_measured(cmd, rundir, single_thread_env(), ranks == 1)
         if rc != 0 or not (rundir / "result.json").exists():
             raise failure("grainscale", rc, rundir, "stdout.txt", "stderr.txt")
         res: dict[str, Any] = json.loads((rundir / "result.json").read_text())
@@ -234,7 +265,8 @@ def run_grainscale_worker(
 
 
 def parse_liggghts_log(text: str) -> dict[str, Any]:
-    """Loop time, last thermo block, warnings and a few diagnostics from a LIGGGHTS log."""
+    """Loop time (of the first and of every run command), last thermo block, warnings and a
+    few diagnostics from a LIGGGHTS log."""
     match = LOOP_RE.search(text)
     if not match:
         raise BenchmarkError("no 'Loop time' line in the LIGGGHTS log:\n" + text[-2000:])
@@ -256,8 +288,12 @@ def parse_liggghts_log(text: str) -> dict[str, Any]:
         m = re.search(pattern, text)
         return float(m.group(1)) if m else None
 
+    loops = [(float(m.group(1)), int(m.group(3))) for m in LOOP_RE.finditer(text)]
     return {
-        "loop_seconds": float(match.group(1)),
+        "loop_seconds": float(match.group(1)),  # of the first run command
+        # (seconds, steps) of every run command, in order (a benchmark with an untimed run
+        # before the timed one reads the last)
+        "loops": loops,
         "procs": int(match.group(2)),
         "steps": int(match.group(3)),
         "atoms": int(match.group(4)),

@@ -89,11 +89,12 @@ class RunResult:
 # set-up
 
 
-def prepare_inputs(case: SettleCase, workdir: Path) -> None:
-    """Generate the initial state once and write it for both codes."""
+def prepare_inputs(case: SettleCase, workdir: Path, runs: str | None = None) -> None:
+    """Generate the initial state once and write it for both codes (``runs``: the commands
+    that end the LIGGGHTS input, default ``run <case.steps>``)."""
     pos, vel = initial_state(case)
     write_liggghts_data(workdir / "data.settle", case, pos, vel)
-    (workdir / "in.settle").write_text(liggghts_input(case, "../data.settle"))
+    (workdir / "in.settle").write_text(liggghts_input(case, "../data.settle", runs=runs))
     np.savez(workdir / "state.npz", position=pos, velocity=vel)
     (workdir / "case.json").write_text(json.dumps(dataclasses.asdict(case)))
 

@@ -113,8 +113,11 @@ def write_liggghts_data(path: Path, case: SettleCase, pos: FloatArray, vel: Floa
         np.savetxt(f, vels, fmt=["%d"] + ["%.17g"] * 6)
 
 
-def liggghts_input(case: SettleCase, data_file: str, thermo_every: int = 1000) -> str:
-    """LIGGGHTS 3.8 input script for the case (one wall/gran fix per plane wall)."""
+def liggghts_input(
+    case: SettleCase, data_file: str, thermo_every: int = 1000, runs: str | None = None
+) -> str:
+    """LIGGGHTS 3.8 input script for the case (one wall/gran fix per plane wall); ``runs``
+    replaces the final ``run`` command (see liggghts_script)."""
     hx, hy, hz = case.box_hi
     walls = [("xlo", "xplane", 0.0), ("xhi", "xplane", hx), ("ylo", "yplane", 0.0),
              ("yhi", "yplane", hy), ("zlo", "zplane", 0.0), ("zhi", "zplane", hz)]  # fmt: skip
@@ -123,7 +126,9 @@ def liggghts_input(case: SettleCase, data_file: str, thermo_every: int = 1000) -
         f"primitive type 1 {style} {value!r}"
         for name, style, value in walls
     )
-    return liggghts_script("settle", case, data_file, wall_lines, thermo_every, lost="error")
+    return liggghts_script(
+        "settle", case, data_file, wall_lines, thermo_every, lost="error", runs=runs
+    )
 
 
 def liggghts_preamble(title: str, data_file: str, skin: float) -> str:
@@ -144,12 +149,20 @@ neigh_modify    delay 0
 
 
 def liggghts_script(
-    name: str, case: Any, data_file: str, wall_lines: str, thermo_every: int, lost: str
+    name: str,
+    case: Any,
+    data_file: str,
+    wall_lines: str,
+    thermo_every: int,
+    lost: str,
+    runs: str | None = None,
 ) -> str:
     """The LIGGGHTS 3.8 input shared by the benchmarks: one particle type, Hertz with tangential
     history, gravity along -z, the given wall fixes, nve/sphere, thermo of atoms, KE, rotational
     KE and mean z. ``case`` has the fields of SettleCase's physics (n_particles, skin, moduli,
-    restitution, friction, time_step, gravity, steps); ``lost``: LIGGGHTS' thermo_modify lost."""
+    restitution, friction, time_step, gravity, steps); ``lost``: LIGGGHTS' thermo_modify lost;
+    ``runs``: the commands that end the script (default ``run <case.steps>``)."""
+    runs = f"run             {case.steps}" if runs is None else runs.rstrip("\n")
     preamble = liggghts_preamble(f"grainscale '{name}' benchmark, N = {case.n_particles}",
                                  data_file, case.skin)  # fmt: skip
     return f"""\
@@ -172,5 +185,5 @@ variable        zmean equal xcm(all,z)
 thermo_style    custom step atoms ke c_rke v_zmean
 thermo_modify   lost {lost} norm no
 thermo          {thermo_every}
-run             {case.steps}
+{runs}
 """

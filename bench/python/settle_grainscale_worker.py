@@ -8,6 +8,9 @@ driver, builds the same case as the LIGGGHTS input (see settle_case.py), times o
 after the timed call) and rank 0 writes the result, with the particle and ghost counts of every
 rank. ``--guards off`` switches the run-time guards off (``Simulation(guards=False)``) and
 ``--lost-particles`` sets the lost-particle report; guards_cost.py compares the two settings.
+``--untimed-steps K`` runs K steps before the timed call (dense_bed.py: the settled bed) and
+records the state at the start of the timed part; ``--positions PREFIX`` (one process) saves
+the positions there and at the end as PREFIX_start.npy and PREFIX_end.npy.
 """
 
 from __future__ import annotations
@@ -30,8 +33,12 @@ def run(
     balance_every: int | None = None,
     guards: bool = True,
     lost_particles: str = "warn",
+    untimed_steps: int = 0,
+    positions: str | None = None,
 ) -> dict[str, Any]:
-    """Build the case with the grainscale API, run it and return timings and observables."""
+    """Build the case with the grainscale API, run it (``untimed_steps`` untimed steps, then
+    ``case.steps`` timed ones) and return timings and observables; ``positions``: the prefix of
+    the position files (one process only)."""
     import grainscale as gs  # imported here so that import time is outside the timed section
 
     position, velocity = load_state(state_file)
@@ -44,6 +51,17 @@ def run(
     ke_initial = float(sim.kinetic_energy())
     setup_seconds = time.perf_counter() - t_setup
 
+    start: dict[str, Any] = {}
+    if untimed_steps > 0:
+        t_untimed = time.perf_counter()
+        sim.run(steps=untimed_steps, progress=False)
+        start = {
+            "untimed_steps": untimed_steps,
+            "untimed_seconds": time.perf_counter() - t_untimed,
+            "contacts_start": int(sim.num_contacts()),
+        }
+        start |= {f"{k}_start": v for k, v in observables(sim, positions, "start").items()}
+
     if sim.comm is not None:
         sim.comm.Barrier()
     t0, c0 = time.perf_counter(), time.process_time()
@@ -53,9 +71,46 @@ def run(
     run_seconds = time.perf_counter() - t0
     cpu_seconds = time.process_time() - c0  # less sensitive than wall clock to a busy machine
 
+    end = observables(sim, positions, "end")
+    ke_total, ke_trans, n_final = end["ke"], end["ke_trans"], end["n"]
+    thermo = {k: _plain(v) for k, v in sim.thermo().items()}
+    ranks = {
+        "ranks": sim.ranks,
+        "particles_per_rank": sim.decomposition()["counts"],
+        "ghosts_per_rank": gather_all(sim, int(sim.engine.diagnostics()["ghosts"])),
+        "halo_seconds_per_rank": gather_all(sim, float(sim.engine.diagnostics()["halo_seconds"])),
+        "rebuilds": int(sim.engine.diagnostics()["rebuilds"]),
+    }
+    return (
+        ranks
+        | {
+            "version": getattr(gs, "__version__", "unknown"),
+            "run_seconds": run_seconds,
+            "cpu_seconds": cpu_seconds,
+            "setup_seconds": setup_seconds,
+            "guards": bool(sim.guards.enabled),
+            "lost_particles_policy": sim.lost_particles_policy,
+            "steps": int(sim.step),
+            "n_final": n_final,
+            "ke_initial": ke_initial,
+            "ke_final": ke_total,
+            "ke_trans_final": ke_trans,
+            "ke_rot_final": ke_total - ke_trans,
+            "mean_z_final": end["mean_z"],
+            "contacts_final": int(sim.num_contacts()),
+            "thermo": thermo,
+            "rss_before_sim_kib": rss_before_kib,
+        }
+        | start
+    )
+
+
+def observables(sim: Any, positions: str | None = None, tag: str = "") -> dict[str, Any]:
+    """Kinetic energy (total and translational), mean height and particle count over every
+    rank; with ``positions`` (one process) the positions are saved to ``<positions>_<tag>.npy``.
+    Sums over this rank's particles (views, no copies: the peak memory is the engine's), then
+    over the ranks."""
     ke_total = float(sim.kinetic_energy())
-    # Sums over this rank's particles (views, no copies: the peak memory is the engine's), then
-    # over the ranks.
     with sim.particles(writable=False) as p:
         vel = p.velocity
         local = np.array(
@@ -65,35 +120,12 @@ def run(
                 len(p),
             ]
         )
+        if positions is not None:
+            np.save(f"{positions}_{tag}.npy", p.position)
     total = local if sim.comm is None else sim.comm.allreduce(local)
-    ke_trans, n_final = float(total[0]), int(total[2])
-    mean_z = float(total[1] / max(n_final, 1))
-    thermo = {k: _plain(v) for k, v in sim.thermo().items()}
-    ranks = {
-        "ranks": sim.ranks,
-        "particles_per_rank": sim.decomposition()["counts"],
-        "ghosts_per_rank": gather_all(sim, int(sim.engine.diagnostics()["ghosts"])),
-        "halo_seconds_per_rank": gather_all(sim, float(sim.engine.diagnostics()["halo_seconds"])),
-        "rebuilds": int(sim.engine.diagnostics()["rebuilds"]),
-    }
-    return ranks | {
-        "version": getattr(gs, "__version__", "unknown"),
-        "run_seconds": run_seconds,
-        "cpu_seconds": cpu_seconds,
-        "setup_seconds": setup_seconds,
-        "guards": bool(sim.guards.enabled),
-        "lost_particles_policy": sim.lost_particles_policy,
-        "steps": int(sim.step),
-        "n_final": n_final,
-        "ke_initial": ke_initial,
-        "ke_final": ke_total,
-        "ke_trans_final": ke_trans,
-        "ke_rot_final": ke_total - ke_trans,
-        "mean_z_final": mean_z,
-        "contacts_final": int(sim.num_contacts()),
-        "thermo": thermo,
-        "rss_before_sim_kib": rss_before_kib,
-    }
+    n = int(total[2])
+    return {"ke": ke_total, "ke_trans": float(total[0]), "mean_z": float(total[1] / max(n, 1)),
+            "n": n}  # fmt: skip
 
 
 def settle_simulation(
@@ -193,10 +225,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--balance-every", type=int, default=None, help="automatic load balancing interval"
     )
+    parser.add_argument(
+        "--untimed-steps", type=int, default=0, help="steps run before the timed call"
+    )
+    parser.add_argument(
+        "--positions", default=None, help="save the positions as PREFIX_start/_end.npy"
+    )
     add_guard_options(parser)
     args = parser.parse_args(argv)
     case = SettleCase(**json.loads(args.case.read_text()))
-    result = run(case, args.state, args.balance_every, args.guards == "on", args.lost_particles)
+    result = run(
+        case,
+        args.state,
+        args.balance_every,
+        args.guards == "on",
+        args.lost_particles,
+        args.untimed_steps,
+        args.positions,
+    )
     from grainscale.parallel import launched_ranks
 
     if launched_ranks() == 1 or _rank() == 0:
