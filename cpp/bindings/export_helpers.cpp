@@ -100,6 +100,8 @@ py::dict build_info() {
   info["mpi"] = Communicator::mpi_available();
   info["build_type"] = std::string(GRAINSCALE_BUILD_TYPE);
   info["compiler"] = compiler();
+  // Instrumented code runs several times slower: timing checks do not apply.
+  info["sanitized"] = GRAINSCALE_SANITIZED_BUILD != 0;
   return info;
 }
 
@@ -114,6 +116,6 @@ void export_helpers(py::module_& m) {
   m.def("with_mpi", &Communicator::mpi_available, "Whether the core was built with MPI.");
   m.def("build_info", &build_info,
         "How the core was built: native (-march=native) or portable, the instruction sets the "
-        "compiled code uses, MPI, build type, compiler.");
+        "compiled code uses, MPI, build type, compiler, sanitizers.");
   export_watchdog(m);
 }

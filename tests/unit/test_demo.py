@@ -174,7 +174,8 @@ def test_silo_demo_pure_cg_jams_and_the_hierarchy_discharges(quick_silo) -> None
     mlcg = s["runs"]["mlcg"]
     assert len(mlcg["particles"]) == 2 and all(n > 0 for n in mlcg["particles"])
     assert sum(mlcg["particles"]) < 0.5 * s["runs"]["reference"]["particles"][0]
-    assert s["speed_up"] > 1
+    if not gs._core.build_info()["sanitized"]:  # instrumented code is several times slower
+        assert s["speed_up"] > 1
 
 
 def test_silo_demo_books_close(quick_silo) -> None:
