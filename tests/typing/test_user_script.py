@@ -18,8 +18,12 @@ SCRIPT = Path(__file__).with_name("user_script.py")
 
 def _env() -> dict[str, str]:
     # the package the tests import, whether installed or the source tree
-    package_dir = str(Path(grainscale.__file__).resolve().parents[1])
-    return {**os.environ, "PYTHONPATH": package_dir, "MYPYPATH": package_dir}
+    package_dir = Path(grainscale.__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": str(package_dir)}
+    # mypy finds an installed package itself and refuses site-packages on its search path
+    if package_dir.name != "site-packages":
+        env["MYPYPATH"] = str(package_dir)
+    return env
 
 
 def test_user_script_passes_mypy_strict(tmp_path: Path) -> None:
