@@ -1,8 +1,11 @@
-"""Settings that would be ignored are refused: misspelt or unknown attributes of Simulation and
-Hierarchy, set-up fixed at construction, a run up to a time already past. Gravity is a setting
-that acts from the next step."""
+"""Settings that would be ignored or fail late are refused: misspelt or unknown attributes of
+Simulation and Hierarchy, set-up fixed at construction, a run up to a time already past, an
+output directory that is a file. Gravity is a setting that acts from the next step."""
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -72,3 +75,23 @@ def test_run_until_a_time_already_past_is_refused() -> None:
         sim.run(until=5e-5, progress=False)
     sim.run(until=sim.time - 0.5e-5, progress=False)  # rounding of a computed time: no step
     assert sim.step == 10
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda d: gs.io.VTK(d, every_steps=1),
+        lambda d: gs.io.Dump(d, every_steps=1),
+        lambda d: gs.io.ContactNetwork(d, every_steps=1),
+    ],
+)
+def test_output_directory_that_is_a_file_is_refused_when_made(
+    tmp_path: Path, make: Callable[[Path], object]
+) -> None:
+    taken = tmp_path / "taken"
+    taken.write_text("a file")
+    for bad, why in [(taken, "a file of that name exists"), (taken / "sub", "is a file")]:
+        with pytest.raises(ValueError, match=f"directory, got '{bad}': .*{why}"):
+            make(bad)
+    out = make(tmp_path / "new" / "dir")  # created when it first writes
+    assert not (tmp_path / "new").exists() and out is not None

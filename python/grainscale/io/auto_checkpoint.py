@@ -15,6 +15,7 @@ import string
 from pathlib import Path
 from typing import Any
 
+from .paths import make_directory
 from .schedule import Schedule
 
 DEFAULT_NAME = "checkpoint_{step:010d}.h5"
@@ -148,7 +149,7 @@ class Checkpoints:
         step = int(sim.step)
         path = self.path_for(step)
         if int(getattr(sim, "rank", 0)) == 0:
-            path.parent.mkdir(parents=True, exist_ok=True)
+            make_directory("Checkpoints.path", path.parent)
         sim.checkpoint(path)
         self.files.append(path)
         self._schedule.done(step, sim.time, sim.time_step)

@@ -52,6 +52,7 @@ import numpy as np
 from .. import parallel
 from .._validate import flag
 from .h5snapshot import read_snapshot, snapshot_files, write_snapshot
+from .paths import make_directory, output_directory
 from .schedule import Schedule
 from .vtk import PVDSeries, write_pvtp, write_vtp_lines
 from .vtk_output import check_prefix
@@ -186,7 +187,7 @@ class ContactNetwork:
             raise ValueError("ContactNetwork needs vtk=True or table=True, got both False")
         if appended and not binary:
             raise ValueError("ContactNetwork.appended=True requires binary=True, got binary=False")
-        self.directory = Path(directory)
+        self.directory = output_directory("ContactNetwork.directory", directory)
         self.prefix = prefix
         self.vtk, self.table, self.walls = bool(vtk), bool(table), bool(walls)
         self.binary, self.appended, self.resume = bool(binary), bool(appended), bool(resume)
@@ -239,7 +240,7 @@ class ContactNetwork:
         rank: int,
         ranks: int,
     ) -> Path:
-        self.directory.mkdir(parents=True, exist_ok=True)
+        make_directory("ContactNetwork.directory", self.directory)
         n = len(data["id_i"])
         points = np.concatenate([data["position_i"], data["position_j"]])
         segments = np.stack([np.arange(n), np.arange(n, 2 * n)], axis=1).astype(np.int64)

@@ -33,6 +33,7 @@ import numpy as np
 
 from .h5snapshot import read_snapshot, snapshot_files, write_snapshot
 from .particle_fields import Extra, check_extra, choose_fields, extra_arrays, field_arrays
+from .paths import output_directory
 from .schedule import Schedule
 from .vtk_output import check_prefix
 
@@ -121,7 +122,7 @@ class Dump:
         chosen = choose_fields("Dump", fields, DEFAULT_FIELDS)
         self.fields = chosen if "id" in chosen else [*chosen, "id"]
         self.extra = check_extra("Dump", extra, self.fields)
-        self.directory = Path(directory)
+        self.directory = output_directory("Dump.directory", directory)
         self.prefix = prefix
         self.files: list[Path] = []  # snapshot files written (the index files under MPI)
 

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from .paths import make_directory
+
 VERSION = 1
 
 
@@ -57,7 +59,7 @@ def write_snapshot(
 ) -> Path:
     """Write this rank's ``arrays`` (each with the items along its first axis) of the snapshot
     ``<directory>/<stem>.h5``; returns that path (the index under MPI)."""
-    directory.mkdir(parents=True, exist_ok=True)
+    make_directory("output directory", directory)
     index = directory / f"{stem}.h5"
 
     def datasets(f: Any) -> None:

@@ -13,6 +13,7 @@ import numpy as np
 
 from .._validate import flag
 from .particle_fields import Extra, check_extra, choose_fields, extra_arrays, field_arrays
+from .paths import make_directory, output_directory
 from .schedule import Schedule
 from .vtk import PathLike, PVDSeries, write_pvtp, write_vtp, write_vtp_mesh
 from .wall_surfaces import wall_surfaces
@@ -112,7 +113,7 @@ class VTK:
         self._optional = ("torque",) if fields is None else ()
         reserved = ["rank", "level", *self.fields]
         self.extra = check_extra("VTK", extra, reserved)
-        self.directory = Path(directory)
+        self.directory = output_directory("VTK.directory", directory)
         self.prefix = prefix
         self.binary = bool(binary)
         self.appended = bool(appended)
@@ -182,7 +183,7 @@ class VTK:
         """
         step = int(sim.step)
         time = float(sim.time)
-        self.directory.mkdir(parents=True, exist_ok=True)
+        make_directory("VTK.directory", self.directory)
         rank, ranks = int(getattr(sim, "rank", 0)), int(getattr(sim, "ranks", 1))
         name = f"{self.prefix}_{step:08d}.vtp"
         if ranks > 1:
