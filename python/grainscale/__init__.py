@@ -11,6 +11,7 @@ from .geometry import Box, Plane, Rectangle
 from .guards import Guards
 from .hierarchy import Exchange, Hierarchy, Level
 from .materials import Material
+from .nesting import nested_levels
 from .particle_view import ParticleView
 from .sim_walls import WallHandle, WallMotion
 from .simulation import Simulation
@@ -36,6 +37,7 @@ __all__ = [
     "geometry",
     "insert",
     "io",
+    "nested_levels",
     "parallel",
     "scaling",
     "timestep",

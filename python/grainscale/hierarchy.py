@@ -66,13 +66,11 @@ from ._validate import flag, positive
 from .coupling import Coupling, StressBoundary, rest_speed
 from .dist import Distribution
 from .levels import (
-    CELL_PARENT_DIAMETERS,
-    MIN_CELL_CHILD_DIAMETERS,
-    MIN_CELL_PARENT_DIAMETERS,
     Exchange,
     Level,
     _bounds,
     _flowing,
+    cell_size_range,
     cells_across,
     check_nesting,
     check_setup_record,
@@ -205,7 +203,7 @@ class Hierarchy(StrictAttributes):
         psim, csim = self.sims[parent], self.sims[k]
         d_parent, d_child = 2 * self.sizes[parent].max_radius, 2 * self.sizes[k].max_radius
         owner = f"Hierarchy.levels[{k}].exchange.cell_size"
-        lowest = max(MIN_CELL_PARENT_DIAMETERS * d_parent, MIN_CELL_CHILD_DIAMETERS * d_child)
+        lowest, default = cell_size_range(d_parent, d_child)
         spec = self.levels[k].region
         assert spec is not None  # a child level has a region (checked in __init__)
         region = spec._to_core(f"Hierarchy.levels[{k}]")
@@ -242,7 +240,7 @@ class Hierarchy(StrictAttributes):
             except ValueError as err:
                 raise ValueError(f"{owner}: {err}") from None
         else:
-            itf = self._default_interface(interface, CELL_PARENT_DIAMETERS * d_parent, lowest, k)
+            itf = self._default_interface(interface, default, lowest, k)
         c = Coupling(parent, k, itf, ex)
         c.advance.downward = c.grid["face_normal"] @ np.asarray(self.base.gravity, float) > 0
         c.advance.density = float(self.material.density)

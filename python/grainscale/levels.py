@@ -29,6 +29,21 @@ Region = Box | Cylinder | Mesh
 CELL_PARENT_DIAMETERS = 2.0
 MIN_CELL_PARENT_DIAMETERS = 1.5
 MIN_CELL_CHILD_DIAMETERS = 2.5
+# A region keeps this many largest parent radii clear of its parent's interface faces (the
+# parent's insertion shells, check_nesting).
+NESTING_RADII = 5.0
+
+
+def cell_size_range(parent_diameter: float, child_diameter: float) -> tuple[float, float]:
+    """(lowest, default) exchange cell edge (m) of an interface between particles of largest
+    diameters ``parent_diameter`` and ``child_diameter`` (m): the default is
+    CELL_PARENT_DIAMETERS parent diameters, never below lowest = max(1.5 parent, 2.5 child
+    diameters); the hierarchy reduces it towards lowest only where a region is too small for
+    its cells across (cells_across)."""
+    lowest = max(
+        MIN_CELL_PARENT_DIAMETERS * parent_diameter, MIN_CELL_CHILD_DIAMETERS * child_diameter
+    )
+    return lowest, max(CELL_PARENT_DIAMETERS * parent_diameter, lowest)
 
 
 @dataclass(frozen=True)
@@ -250,6 +265,17 @@ def _bounds(region: Region | None, domain: Box) -> tuple[np.ndarray, np.ndarray]
     return np.asarray(lo, float), np.asarray(hi, float)
 
 
+def flowing_size(base: scaling.ParameterSet, owner: str = "Hierarchy") -> Distribution | None:
+    """The size distribution (radius, m) of the particles a hierarchy resolves: ``base.size``,
+    else the first insertion's; None if neither gives one."""
+    size = base.size
+    if size is None:
+        for op in base.insertions:
+            size = as_distribution(op.radius, owner, "base.size")
+            break
+    return None if size is None else as_distribution(size, owner, "base.size")
+
+
 def _flowing(base: scaling.ParameterSet) -> tuple[Distribution, Material]:
     """The size distribution and material of the particles the hierarchy resolves."""
     material = None
@@ -259,17 +285,13 @@ def _flowing(base: scaling.ParameterSet) -> tuple[Distribution, Material]:
             break
     if material is None and base.particles:
         material = base.particles[0].material
-    size = base.size
-    if size is None:
-        for op in base.insertions:
-            size = as_distribution(op.radius, "Hierarchy", "base.size")
-            break
+    size = flowing_size(base)
     if size is None or material is None:
         raise ValueError(
             "Hierarchy.base must insert particles (a Pack or Stream in insertions) or give size "
             "and particles, so that the fine levels know their particles, got neither"
         )
-    return as_distribution(size, "Hierarchy", "base.size"), material
+    return size, material
 
 
 def in_cells(grid: dict[str, Any], x: np.ndarray) -> np.ndarray:
@@ -313,14 +335,14 @@ def check_nesting(
     bounds: list[tuple[np.ndarray, np.ndarray]],
 ) -> None:
     """A region must keep clear of its parent's interface faces by the parent's insertion shell
-    (5 largest parent radii): what the parent inserts or gives up there must not happen inside
-    it. ``couplings``: the hierarchy's interfaces (with ``child`` and ``grid``)."""
+    (NESTING_RADII largest parent radii): what the parent inserts or gives up there must not
+    happen inside it. ``couplings``: the hierarchy's interfaces (with ``child`` and ``grid``)."""
     for c in couplings:
         for k in range(1, len(parents)):
             if parents[k] != c.child:
                 continue
             lo, hi = bounds[k]
-            depth = 5 * sizes[c.child].max_radius
+            depth = NESTING_RADII * sizes[c.child].max_radius
             g = c.grid
             edge = np.asarray(g["edge"])
             for centre, axis in zip(g["face_centre"], g["face_axis"].astype(int), strict=True):
