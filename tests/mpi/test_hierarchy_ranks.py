@@ -82,3 +82,17 @@ def test_extraction_is_the_same_decomposed(world):
     assert removed[0][0] > 1e-4
     assert removed[0][0] == removed[1][0]
     assert np.array_equal(removed[0][1], removed[1][1])
+
+
+def test_every_level_is_balanced_over_the_ranks(world):
+    """Each level is decomposed over every rank with its own load balancing: after a pour, every
+    rank holds particles of every level, and balancing a level evens its estimated work."""
+    h = pouring(world)
+    h.run(until=0.08)
+    for k in (0, 1):
+        sim = h.level(k)
+        counts = world.allgather(sim.num_local_particles)
+        assert min(counts) > 0, (k, counts)
+        report = sim.balance()
+        assert report["after"] <= min(report["before"], 1.1), (k, report)
+        assert sum(world.allgather(sim.num_local_particles)) == sum(counts)
