@@ -19,6 +19,7 @@ import platform
 import re
 import resource
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -366,6 +367,34 @@ def paired_ratios(runs: Sequence[Any], attribute: str) -> list[float]:
         for d in by_round.values()
         if len(d) == 2
     ]
+
+
+def ratio_summary(runs: Sequence[Any], attribute: str) -> dict[str, Any] | None:
+    """Per-round grainscale / LIGGGHTS ratios of ``attribute`` and their median; None when no
+    round ran both codes."""
+    ratios = paired_ratios(runs, attribute)
+    return {"per_round": ratios, "median": statistics.median(ratios)} if ratios else None
+
+
+def per_round(ratio: dict[str, Any]) -> str:
+    """The rounds of a :func:`ratio_summary`, as printed beside its median."""
+    return ", ".join(f"{v:.3f}" for v in ratio["per_round"])
+
+
+def print_warnings(entry: dict[str, Any]) -> None:
+    """Every distinct warning the runs of one size reported."""
+    for w in sorted({w for run in entry["runs"] for w in run["warnings"]}):
+        print(f"  warning: {w}")
+
+
+def prepare_codes(only: str | None, codes: Sequence[str]) -> tuple[list[str], str | None]:
+    """The codes to run (``only`` or all) and the LIGGGHTS executable (installed if missing);
+    checks and prints the grainscale build when it runs."""
+    chosen = [only] if only else list(codes)
+    liggghts_exe = ensure_liggghts() if "liggghts" in chosen else None
+    if "grainscale" in chosen:
+        check_grainscale()
+    return chosen, liggghts_exe
 
 
 def write_results(

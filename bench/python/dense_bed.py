@@ -45,10 +45,11 @@ from bench_common import (
     BenchmarkError,
     add_spring_rotation_option,
     build_label,
-    check_grainscale,
-    ensure_liggghts,
     grainscale_build,
-    paired_ratios,
+    per_round,
+    prepare_codes,
+    print_warnings,
+    ratio_summary,
     run_grainscale_worker,
     run_liggghts_log,
     run_rounds,
@@ -228,13 +229,10 @@ def summarize(runs: list[DenseRun]) -> dict[str, Any]:
             for when, attr in (("start", f"{name}_start"), ("end", f"{name}_final")):
                 s[f"{name}_{when}"] = statistics.median(getattr(r, attr) for r in mine)
         summary[code] = s
-    ratios = paired_ratios(runs, "ns_per_particle_step")
-    if ratios:
+    ratio = ratio_summary(runs, "ns_per_particle_step")
+    if ratio:
         gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
-        summary["ratio_grainscale_over_liggghts"] = {
-            "per_round": ratios,
-            "median": statistics.median(ratios),
-        }
+        summary["ratio_grainscale_over_liggghts"] = ratio
         summary["peak_rss_ratio"] = gs_sum["peak_rss_mib"] / lig_sum["peak_rss_mib"]
         summary["cross_check_rel_diff"] = {
             f"{name}_{when}": gs_sum[f"{name}_{when}"] / lig_sum[f"{name}_{when}"] - 1.0
@@ -270,8 +268,7 @@ def print_table(entry: dict[str, Any]) -> None:
     print("  (c/p: particle contacts per particle, d_ij <= d, over N; coordination = 2 c/p)")
     if "ratio_grainscale_over_liggghts" in s:
         r, x = s["ratio_grainscale_over_liggghts"], s["cross_check_rel_diff"]
-        per_round = ", ".join(f"{v:.3f}" for v in r["per_round"])
-        print(f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round})")
+        print(f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round(r)})")
         print(f"  grainscale/liggghts peak RSS ratio: {s['peak_rss_ratio']:.3f}")
         for when in ("start", "end"):
             print(
@@ -279,9 +276,7 @@ def print_table(entry: dict[str, Any]) -> None:
                 f"{x[f'contacts_per_particle_{when}']:+.2%}, KE {x[f'ke_{when}']:+.1%}, "
                 f"mean z {x[f'mean_z_{when}']:+.3%}"
             )
-    warned = {w for run in entry["runs"] for w in run["warnings"]}
-    for w in sorted(warned):
-        print(f"  warning: {w}")
+    print_warnings(entry)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -310,11 +305,8 @@ def main(argv: list[str] | None = None) -> int:
     if min(args.sizes) < 1 or args.steps < 1 or args.repeats < 1 or not args.settle_time > 0:
         parser.error("--sizes, --settle-time, --steps and --repeats must be positive")
 
-    codes = [args.only] if args.only else list(CODES)
     try:
-        liggghts_exe = ensure_liggghts() if "liggghts" in codes else None
-        if "grainscale" in codes:
-            check_grainscale()
+        codes, liggghts_exe = prepare_codes(args.only, CODES)
         entries: dict[str, dict[str, Any]] = {}
         for n in args.sizes:
             case = SettleCase(

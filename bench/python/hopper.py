@@ -51,11 +51,12 @@ from bench_common import (
     BenchmarkError,
     add_spring_rotation_option,
     build_label,
-    check_grainscale,
-    ensure_liggghts,
     failure,
     grainscale_build,
-    paired_ratios,
+    per_round,
+    prepare_codes,
+    print_warnings,
+    ratio_summary,
     run_grainscale_worker,
     run_liggghts_log,
     run_measured,
@@ -303,19 +304,13 @@ def summarize(case: HopperCase, runs: list[RunResult]) -> dict[str, Any]:
         baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
         if baseline:  # grainscale: interpreter, imports, initial state
             summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
-    ratios = paired_ratios(runs, "ns_per_particle_step")
-    cpu_ratios = paired_ratios(runs, "cpu_ns_per_particle_step")
-    if ratios:
+    ratio = ratio_summary(runs, "ns_per_particle_step")
+    if ratio:
         gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
-        summary["ratio_grainscale_over_liggghts"] = {
-            "per_round": ratios,
-            "median": statistics.median(ratios),
-            "target": 0.5,
-        }
-        summary["cpu_time_ratio_grainscale_over_liggghts"] = {
-            "per_round": cpu_ratios,
-            "median": statistics.median(cpu_ratios),
-        }
+        summary["ratio_grainscale_over_liggghts"] = {**ratio, "target": 0.5}
+        summary["cpu_time_ratio_grainscale_over_liggghts"] = ratio_summary(
+            runs, "cpu_ns_per_particle_step"
+        )
         gs_first = next(r for r in runs if r.code == "grainscale")
         lig_first = next(r for r in runs if r.code == "liggghts")
         summary["cross_check"] = {
@@ -394,15 +389,14 @@ def print_table(entry: dict[str, Any]) -> None:
         )
     if "ratio_grainscale_over_liggghts" in s:
         r, x = s["ratio_grainscale_over_liggghts"], s["cross_check"]
-        per_round = ", ".join(f"{v:.3f}" for v in r["per_round"])
         print(
-            f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round}); "
+            f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round(r)}); "
             f"target <= {r['target']}"
         )
         c = s["cpu_time_ratio_grainscale_over_liggghts"]
-        per_round = ", ".join(f"{v:.3f}" for v in c["per_round"])
         print(
-            f"  same with CPU time instead of wall clock: median {c['median']:.3f}  ({per_round}); "
+            f"  same with CPU time instead of wall clock: median {c['median']:.3f}  "
+            f"({per_round(c)}); "
             f"CPU ns/p-step gs {s['grainscale']['median_cpu_ns_per_particle_step']:.1f}, "
             f"lig {s['liggghts']['median_cpu_ns_per_particle_step']:.1f}"
         )
@@ -431,9 +425,7 @@ def print_table(entry: dict[str, Any]) -> None:
     }
     if len(builds) > 1:
         print(f"  note: grainscale was reinstalled between rounds ({len(builds)} different builds)")
-    warned = {w for run in entry["runs"] for w in run["warnings"]}
-    for w in sorted(warned):
-        print(f"  warning: {w}")
+    print_warnings(entry)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -466,11 +458,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (args.deletion == "domain" or args.deletion.startswith("outlet")):
         parser.error(f"--deletion must be 'domain' or 'outlet[:every]', got {args.deletion!r}")
 
-    codes = [args.only] if args.only else list(CODES)
     try:
-        liggghts_exe = ensure_liggghts() if "liggghts" in codes else None
-        if "grainscale" in codes:
-            check_grainscale()
+        codes, liggghts_exe = prepare_codes(args.only, CODES)
         entries: dict[str, dict[str, Any]] = {}
         for n in args.sizes:
             case = HopperCase(

@@ -46,10 +46,11 @@ from bench_common import (
     BenchmarkError,
     add_spring_rotation_option,
     build_label,
-    check_grainscale,
-    ensure_liggghts,
     grainscale_build,
-    paired_ratios,
+    per_round,
+    prepare_codes,
+    print_warnings,
+    ratio_summary,
     run_grainscale_worker,
     run_liggghts_log,
     run_rounds,
@@ -203,13 +204,10 @@ def summarize(runs: list[RunResult]) -> dict[str, Any]:
         baseline = [r.extra["rss_before_sim_kib"] for r in mine if "rss_before_sim_kib" in r.extra]
         if baseline:  # grainscale: interpreter, imports, initial state
             summary[code]["rss_before_sim_mib"] = max(baseline) / 1024.0
-    ratios = paired_ratios(runs, "ns_per_particle_step")
-    if ratios:
+    ratio = ratio_summary(runs, "ns_per_particle_step")
+    if ratio:
         gs_sum, lig_sum = summary["grainscale"], summary["liggghts"]
-        summary["ratio_grainscale_over_liggghts"] = {
-            "per_round": ratios,
-            "median": statistics.median(ratios),
-        }
+        summary["ratio_grainscale_over_liggghts"] = ratio
         summary["cross_check"] = {
             "ke_final_rel_diff": gs_sum["ke_final"] / lig_sum["ke_final"] - 1.0,
             "ke_trans_final_rel_diff": gs_sum["ke_trans_final"] / lig_sum["ke_trans_final"] - 1.0,
@@ -247,16 +245,13 @@ def print_table(entry: dict[str, Any]) -> None:
         )
     if "ratio_grainscale_over_liggghts" in s:
         r, x = s["ratio_grainscale_over_liggghts"], s["cross_check"]
-        per_round = ", ".join(f"{v:.3f}" for v in r["per_round"])
-        print(f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round})")
+        print(f"  grainscale/liggghts time ratio: median {r['median']:.3f}  ({per_round(r)})")
         print(
             f"  cross-check: KE rel. diff {x['ke_final_rel_diff']:+.2%} "
             f"(translational {x['ke_trans_final_rel_diff']:+.2%}), "
             f"mean z diff {x['mean_z_final_diff_m'] * 1e6:+.2f} um"
         )
-    warned = {w for run in entry["runs"] for w in run["warnings"]}
-    for w in sorted(warned):
-        print(f"  warning: {w}")
+    print_warnings(entry)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -275,11 +270,8 @@ def main(argv: list[str] | None = None) -> int:
     if min(args.sizes) < 1 or args.steps < 1 or args.repeats < 1:
         parser.error("--sizes, --steps and --repeats must be positive")
 
-    codes = [args.only] if args.only else list(CODES)
     try:
-        liggghts_exe = ensure_liggghts() if "liggghts" in codes else None
-        if "grainscale" in codes:
-            check_grainscale()
+        codes, liggghts_exe = prepare_codes(args.only, CODES)
         entries: dict[str, dict[str, Any]] = {}
         for n in args.sizes:
             case = SettleCase(
