@@ -8,7 +8,8 @@
 //    -ffp-contract=off) in 8-wide vectors (GCC vector extension, split by the compiler into
 //    what the target has: 1 AVX-512, 2 AVX or 4 SSE registers) and the same in scalar code
 //    (vectorisation switched off for that function): the vector rate is the roof, the scalar
-//    rate the ceiling of the loop as written (one contact at a time).
+//    rate the ceiling of a loop that takes one contact at a time (the loop evaluates the law on
+//    packs of kPackLanes contacts, core/simd_pack.hpp: printed with the machine line).
 // 2. The packing: d = 2 mm glass-like spheres (E = 1e7 Pa, nu = 0.3, rho = 2500 kg/m^3) on a
 //    simple-cubic lattice of spacing 0.99 d with seeded jitter of +-0.004 d per coordinate:
 //    every lattice neighbour overlaps (by 1 % of d, +-0.8 %), about 3 contacts per particle in
@@ -319,8 +320,8 @@ int main(int argc, char** argv) {
       llc_bytes() / kMiB, bw.array_mib, bw.best_gbs, bw.median_gbs, bw.best_gbs * 32 / 24);
   std::printf(
       "machine: mul+add (no FMA) peak-ish: %.2f GFLOP/s in 8-wide vectors, %.2f GFLOP/s "
-      "scalar\n",
-      vec_gflops, scalar_gflops);
+      "scalar; the contact loop evaluates %d contacts per pack\n",
+      vec_gflops, scalar_gflops, grainscale::kPackLanes);
 
   // 2. The packing.
   bench::Packing packing;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/simd_pack.hpp"
 #include "integrate/time_step.hpp"
 #include "parallel/communicator.hpp"
 #include "parallel/watchdog.hpp"
@@ -97,6 +98,8 @@ py::dict build_info() {
   info["arch"] = arch;
   info["kind"] = native ? std::string("native") : "portable (" + arch + ")";
   info["instruction_sets"] = instruction_sets();
+  // Contacts the pair loop evaluates at once (core/simd_pack.hpp; 1 with GRAINSCALE_SIMD=OFF).
+  info["simd_lanes"] = kPackLanes;
   info["mpi"] = Communicator::mpi_available();
   info["build_type"] = std::string(GRAINSCALE_BUILD_TYPE);
   info["compiler"] = compiler();

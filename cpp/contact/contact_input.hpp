@@ -4,6 +4,7 @@
 // infinite, so r_eff = r_i and m_eff = m_i.
 #pragma once
 
+#include "core/simd_pack.hpp"
 #include "core/types.hpp"
 
 namespace grainscale {
@@ -25,6 +26,23 @@ struct ContactInput {
 struct ContactOutput {
   Vec3 force;
   Vec3 rolling_torque;
+};
+
+// The same for the laws' lane form (core/simd_pack.hpp): one contact (T = Real) or a pack.
+template <class T>
+struct ContactLanes {
+  LaneVec<T> normal;
+  T overlap, r_eff, m_eff;
+  LaneVec<T> v_rel;
+  Real dt;
+  LaneVec<T> w_rel;  // rolling laws only
+  T rolling_inertia;
+};
+
+template <class T>
+struct ContactLanesOutput {
+  LaneVec<T> force;
+  LaneVec<T> rolling_torque;
 };
 
 // Damping ratio factor beta = ln e / sqrt(ln^2 e + pi^2) (< 0), with beta(0) = -1.

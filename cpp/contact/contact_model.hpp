@@ -9,6 +9,9 @@
 //                    gamma_t = Damping::factor |beta| sqrt(k_t m*)
 // Rolling torque:    Rolling::evaluate with k_n, k_t and F_n from above.
 // History layout per contact: [normal | tangential (3) | rolling].
+// force_lanes() is the law once, over the lane type T (core/simd_pack.hpp): the pair loop
+// evaluates packs of contacts, the wall loop one contact (force()); the results are the same
+// bits either way.
 #pragma once
 
 #include <cmath>
@@ -21,6 +24,7 @@
 #include "contact/normal_models.hpp"
 #include "contact/rolling_models.hpp"
 #include "contact/tangential_models.hpp"
+#include "core/simd_pack.hpp"
 #include "state/material_table.hpp"
 
 namespace grainscale {
@@ -71,30 +75,63 @@ class ContactModel {
   }
   const Pair& pair(int mi, int mj) const { return pairs_[mi * stride_ + mj]; }
 
+  // Flat index of a material pair in the table (pair_at(pair_index(mi, mj)) == pair(mi, mj)).
+  int pair_index(int mi, int mj) const { return mi * stride_ + mj; }
+  const Pair& pair_at(int index) const { return pairs_[index]; }
+
+  // One contact (the wall loop, tests): the lane form below on T = Real.
   [[gnu::always_inline]] inline ContactOutput force(const Pair& p, const ContactInput& c,
                                                     Real* history) const {
-    // The stored springs follow the contact's rotation (both at once where there are two).
-    Eigen::Map<Vec3> tangential_spring(history + kTangentialOffset);
+    const ContactLanes<Real> lanes{
+        from_eigen(c.normal), c.overlap,        c.r_eff, c.m_eff, from_eigen(c.v_rel), c.dt,
+        from_eigen(c.w_rel),  c.rolling_inertia};
+    const ContactLanesOutput<Real> out = force_lanes(Param<Pair, Real>(p), lanes, history);
+    return {to_eigen(out.force), to_eigen(out.rolling_torque)};
+  }
+
+  // The law on one contact or a pack of contacts (T: core/simd_pack.hpp); history[s] is value s
+  // of the history of each lane, updated in place.
+  template <class T>
+  [[gnu::always_inline]] inline ContactLanesOutput<T> force_lanes(const Param<Pair, T>& p,
+                                                                  const ContactLanes<T>& c,
+                                                                  T* history) const {
+    // The stored springs follow the contact's rotation.
+    LaneVec<T> tangential_spring{history[kTangentialOffset], history[kTangentialOffset + 1],
+                                 history[kTangentialOffset + 2]};
+    follow_normal(settings_.spring_rotation, tangential_spring, c.normal);
+    LaneVec<T> rolling_spring = LaneVec<T>::zero();
     if constexpr (Rolling::kSpring) {
-      Eigen::Map<Vec3> rolling_spring(history + kRollingOffset);
-      follow_normal(settings_.spring_rotation, tangential_spring, rolling_spring, c.normal);
-    } else {
-      follow_normal(settings_.spring_rotation, tangential_spring, c.normal);
+      rolling_spring = {history[kRollingOffset], history[kRollingOffset + 1],
+                        history[kRollingOffset + 2]};
+      follow_normal(settings_.spring_rotation, rolling_spring, c.normal);
     }
-    const NormalState ns = Normal::evaluate(p.normal, c, history);
-    const Real vn = c.v_rel.dot(c.normal);
-    Real fn = ns.spring - p.damping * std::sqrt(ns.damping_stiffness * c.m_eff) * vn;
-    if (settings_.limit_force && fn < 0) fn = 0;
-    const Vec3 vt = c.v_rel - vn * c.normal;
-    const Real gt =
-        settings_.tangential_damping ? p.damping * std::sqrt(ns.tangential_stiffness * c.m_eff) : 0;
-    const Vec3 ft = MindlinTangential::evaluate(settings_.history, ns.tangential_stiffness, gt,
-                                                p.friction * std::max<Real>(fn, 0), c, vt,
-                                                history + kTangentialOffset);
-    ContactOutput out{fn * c.normal + ft, Vec3::Zero()};
-    if constexpr (kRolling)
-      out.rolling_torque = Rolling::evaluate(p.rolling, {fn, ns.stiffness, ns.tangential_stiffness},
-                                             c, history + kRollingOffset);
+    const NormalState<T> ns = Normal::evaluate(p.sub(&Pair::normal), c, history);
+    const T damping = p.get(&Pair::damping);
+    const T vn = dot(c.v_rel, c.normal);
+    T fn = ns.spring - damping * sqrt_lanes(ns.damping_stiffness * c.m_eff) * vn;
+    if (settings_.limit_force) fn = select(fn < 0.0, splat<T>(0), fn);
+    const LaneVec<T> vt = c.v_rel - vn * c.normal;
+    const T gt = settings_.tangential_damping
+                     ? damping * sqrt_lanes(ns.tangential_stiffness * c.m_eff)
+                     : splat<T>(0);
+    const T fn_plus = select(fn < 0.0, splat<T>(0), fn);  // std::max(fn, 0)
+    const LaneVec<T> ft =
+        MindlinTangential::evaluate(settings_.history, ns.tangential_stiffness, gt,
+                                    p.get(&Pair::friction) * fn_plus, c, vt, tangential_spring);
+    history[kTangentialOffset] = tangential_spring.x;
+    history[kTangentialOffset + 1] = tangential_spring.y;
+    history[kTangentialOffset + 2] = tangential_spring.z;
+    ContactLanesOutput<T> out{fn * c.normal + ft, LaneVec<T>::zero()};
+    if constexpr (kRolling) {
+      out.rolling_torque = Rolling::evaluate(
+          p.sub(&Pair::rolling), RollingContext<T>{fn, ns.stiffness, ns.tangential_stiffness}, c,
+          rolling_spring);
+      if constexpr (Rolling::kSpring) {
+        history[kRollingOffset] = rolling_spring.x;
+        history[kRollingOffset + 1] = rolling_spring.y;
+        history[kRollingOffset + 2] = rolling_spring.z;
+      }
+    }
     return out;
   }
 

@@ -30,15 +30,17 @@
 #include "contact/contact_input.hpp"
 #include "contact/interaction.hpp"
 #include "core/hertz_impact.hpp"
+#include "core/simd_pack.hpp"
 #include "state/material_table.hpp"
 
 namespace grainscale {
 
+template <class T>
 struct NormalState {
-  Real spring;                // elastic/hysteretic normal force (without damping)
-  Real stiffness;             // k_n used by rolling models (EPSD)
-  Real damping_stiffness;     // stiffness the normal dashpot is built on
-  Real tangential_stiffness;  // k_t
+  T spring;                // elastic/hysteretic normal force (without damping)
+  T stiffness;             // k_n used by rolling models (EPSD)
+  T damping_stiffness;     // stiffness the normal dashpot is built on
+  T tangential_stiffness;  // k_t
 };
 
 struct HertzNormal {
@@ -50,10 +52,14 @@ struct HertzNormal {
   static Pair make_pair(const PairModuli& m, const Interaction&) {
     return {m.effective_youngs, m.effective_shear};
   }
-  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c, Real*) {
-    const Real sqrt_rd = std::sqrt(c.r_eff * c.overlap);
-    const Real kn = (4.0 / 3.0) * p.effective_youngs * sqrt_rd;
-    return {kn * c.overlap, kn, 2 * p.effective_youngs * sqrt_rd, 8 * p.effective_shear * sqrt_rd};
+  template <class T>
+  [[gnu::always_inline]] static NormalState<T> evaluate(const Param<Pair, T>& p,
+                                                        const ContactLanes<T>& c, T*) {
+    const T youngs = p.get(&Pair::effective_youngs);
+    const T sqrt_rd = sqrt_lanes(c.r_eff * c.overlap);
+    const T kn = (4.0 / 3.0) * youngs * sqrt_rd;
+    return {kn * c.overlap, kn, 2.0 * youngs * sqrt_rd,
+            8.0 * p.get(&Pair::effective_shear) * sqrt_rd};
   }
 };
 
@@ -73,19 +79,28 @@ struct LinearNormal {
     return {in.normal_stiffness, 2.0 / 7.0, in.tangential_stiffness, m.effective_youngs,
             in.characteristic_velocity};
   }
-  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c,
-                                                     Real* history) {
-    Real kn = p.normal_stiffness;
-    if (!(kn > 0)) {
-      kn = history[0];
-      if (kn == 0) {
-        const Real u =
-            hertz_impact_number(c.m_eff, p.characteristic_velocity, p.effective_youngs, c.r_eff);
-        kn = (16.0 / 15.0) * p.effective_youngs * c.r_eff * std::pow(u, 0.2);
-        history[0] = kn;
-      }
-    }
-    const Real kt = p.tangential_stiffness > 0 ? p.tangential_stiffness : p.tangential_ratio * kn;
+  static Real derived_stiffness(Real m_eff, Real v_c, Real youngs, Real r_eff) {
+    const Real u = hertz_impact_number(m_eff, v_c, youngs, r_eff);
+    return (16.0 / 15.0) * youngs * r_eff * std::pow(u, 0.2);
+  }
+  template <class T>
+  [[gnu::always_inline]] static NormalState<T> evaluate(const Param<Pair, T>& p,
+                                                        const ContactLanes<T>& c, T* history) {
+    const T given = p.get(&Pair::normal_stiffness);
+    const auto is_given = given > 0;
+    const T stored = history[0];
+    const auto derive = mask_and(mask_not(is_given), stored == 0);  // a contact's first step
+    T derived = stored;
+    if (any(derive))
+      derived =
+          select(derive,
+                 per_lane(derive, derived_stiffness, c.m_eff, p.get(&Pair::characteristic_velocity),
+                          p.get(&Pair::effective_youngs), c.r_eff),
+                 stored);
+    history[0] = select(is_given, stored, derived);
+    const T kn = select(is_given, given, derived);
+    const T kt_given = p.get(&Pair::tangential_stiffness);
+    const T kt = select(kt_given > 0, kt_given, p.get(&Pair::tangential_ratio) * kn);
     return {kn * c.overlap, kn, kn, kt};
   }
 };
@@ -106,38 +121,46 @@ struct EEPANormal {
     return {in.eepa_exponent,  in.loading_stiffness, in.unloading_ratio, in.adhesive_stiffness,
             in.pull_off_force, in.adhesion_exponent, m.effective_youngs};
   }
-  static Real power(Real x, Real n) {
-    return n == 1 ? x : (n == 1.5 ? x * std::sqrt(x) : std::pow(x, n));
+  // x^n: exact forms for n = 1 and 1.5, std::pow (per lane) otherwise.
+  template <class T>
+  [[gnu::always_inline]] static T power(T x, T n) {
+    const auto one = n == 1.0;
+    if (all(one)) return x;
+    T r = select(one, x, x * sqrt_lanes(x));
+    const auto other = mask_not(mask_or(one, n == 1.5));
+    if (any(other))
+      r = select(other, per_lane(other, [](Real a, Real b) { return std::pow(a, b); }, x, n), r);
+    return r;
   }
-  [[gnu::always_inline]] static NormalState evaluate(const Pair& p, const ContactInput& c,
-                                                     Real* history) {
-    const Real n = p.exponent;
-    Real k1 = p.loading_stiffness;
-    if (!(k1 > 0))
-      k1 = n == 1 ? 2 * p.effective_youngs * c.r_eff
-                  : (4.0 / 3.0) * p.effective_youngs * std::sqrt(c.r_eff);
-    const Real k2 = p.unloading_ratio * k1;
-    Real& d_max = history[0];
-    const Real d = c.overlap;
-    const Real dn = power(d, n);
-    const Real f_load = k1 * dn;
-    Real f;
-    if (d >= d_max) {
-      d_max = d;  // virgin loading (decided on the overlap, not on rounded branch forces)
-      f = f_load;
-    } else {
-      const Real dpn = (1 - k1 / k2) * power(d_max, n);
-      const Real f_unload = k2 * (dn - dpn);
-      const Real f_adh = -p.adhesive_stiffness * power(d, p.adhesion_exponent);
-      if (f_unload >= f_load)
-        f = f_load;
-      else if (f_unload > f_adh)
-        f = f_unload;
-      else
-        f = f_adh;
+  template <class T>
+  [[gnu::always_inline]] static NormalState<T> evaluate(const Param<Pair, T>& p,
+                                                        const ContactLanes<T>& c, T* history) {
+    const T n = p.get(&Pair::exponent);
+    const auto linear = n == 1.0;
+    T k1 = p.get(&Pair::loading_stiffness);
+    const auto derive = mask_not(k1 > 0);
+    if (any(derive)) {
+      const T youngs = p.get(&Pair::effective_youngs);
+      k1 = select(
+          derive,
+          select(linear, 2.0 * youngs * c.r_eff, (4.0 / 3.0) * youngs * sqrt_lanes(c.r_eff)), k1);
     }
-    const Real k_load = n == 1 ? k1 : n * k1 * power(d, n - 1);
-    return {p.pull_off_force + f, k_load, k_load, (2.0 / 7.0) * k_load};
+    const T k2 = p.get(&Pair::unloading_ratio) * k1;
+    const T d_max = history[0];
+    const T d = c.overlap;
+    const T dn = power(d, n);
+    const T f_load = k1 * dn;
+    // Virgin loading is decided on the overlap, not on rounded branch forces.
+    const auto loading = d >= d_max;
+    const T dpn = (1.0 - k1 / k2) * power(d_max, n);
+    const T f_unload = k2 * (dn - dpn);
+    const T f_adh = -p.get(&Pair::adhesive_stiffness) * power(d, p.get(&Pair::adhesion_exponent));
+    T f = select(f_unload >= f_load, f_load, select(f_unload > f_adh, f_unload, f_adh));
+    f = select(loading, f_load, f);
+    history[0] = select(loading, d, d_max);
+    T k_load = k1;
+    if (!all(linear)) k_load = select(linear, k1, n * k1 * power(d, n - 1.0));
+    return {p.get(&Pair::pull_off_force) + f, k_load, k_load, (2.0 / 7.0) * k_load};
   }
 };
 

@@ -1,26 +1,171 @@
 // The particle-particle force loop, a template over the contact law (one implementation per law,
 // inlined; no virtual calls). Pairs are stored once; forces on ghosts are folded back by the
 // GhostExchange. Torque arm: contact radius r - overlap/2 (as LIGGGHTS).
+//
+// Three passes over batches of up to kBatch touching contacts (core/simd_pack.hpp):
+//   1. scan the list in order: the overlap test per entry, without branches (a contact that
+//      closes forgets its history), and for each touching contact its inputs gathered into the
+//      batch, one array per quantity (the random accesses to particle j happen here, once);
+//   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
+//      square roots of kPackLanes contacts in one instruction each;
+//   3. replay the batch in list order, adding each contact's force and torques to i and j in
+//      exactly the sequence of a one-contact-at-a-time loop.
+// Pass 2 gives the scalar law's bits and pass 3 the scalar loop's summation order, so the
+// forces are the same bits for every lane width (GRAINSCALE_SIMD=OFF builds the one-lane loop).
 #pragma once
 
 #include <algorithm>
-#include <array>
 
 #include "contact/contact_input.hpp"
 #include "contact/contact_stats.hpp"
+#include "core/simd_pack.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "state/particle_store.hpp"
 
 namespace grainscale {
 
-// kUpdate = false evaluates forces on a scratch copy of the history (set-up evaluations must
+namespace detail {
+
+// The touching contacts of one batch, a structure of arrays (pass 1 writes, pass 2 reads
+// packs of it, pass 3 reads the results). Lives on the stack: about 20 kB.
+template <int kRollingValues>
+struct PairBatch {
+  static constexpr int kCapacity = 64;  // a multiple of every lane width
+  static_assert(kCapacity % kPackLanes == 0);
+  using Column = Real[kCapacity];
+  alignas(64) Column dx, dy, dz, rsum, ri, rj, dvx, dvy, dvz, wix, wiy, wiz, wjx, wjy, wjz,
+      inv_mass_sum;
+  alignas(64) Real rolling[kRollingValues][kCapacity];  // w_rel (3), 1 / I_r sum
+  // Results: the force on i, the torques a_i n x F and a_j n x F, the rolling torque on i.
+  alignas(64) Column fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz;
+  alignas(64) Real rolling_torque[kRollingValues > 0 ? 3 : 0][kCapacity];
+  alignas(64) Column overlap, nx, ny, nz;  // for the statistics
+  Index i[kCapacity], j[kCapacity], entry[kCapacity];
+  int pair[kCapacity];
+  int count = 0;
+
+  // Fills the lanes after the last contact with copies of it (their results are not used).
+  void pad(int end) {
+    for (Real* column :
+         {dx, dy, dz, rsum, ri, rj, dvx, dvy, dvz, wix, wiy, wiz, wjx, wjy, wjz, inv_mass_sum})
+      std::fill(column + count, column + end, column[count - 1]);
+    for (int q = 0; q < kRollingValues; ++q)
+      std::fill(rolling[q] + count, rolling[q] + end, rolling[q][count - 1]);
+    std::fill(pair + count, pair + end, pair[count - 1]);
+    std::fill(entry + count, entry + end, entry[count - 1]);
+  }
+};
+
+template <class T>
+[[gnu::always_inline]] inline T load_lanes(const Real* p) {
+  if constexpr (std::is_same_v<T, Real>) {
+    return *p;
+  } else {
+    T v;
+    __builtin_memcpy(&v, p, sizeof(T));
+    return v;
+  }
+}
+template <class T>
+[[gnu::always_inline]] inline void store_lanes(Real* p, T v) {
+  if constexpr (std::is_same_v<T, Real>)
+    *p = v;
+  else
+    __builtin_memcpy(p, &v, sizeof(T));
+}
+
+// Pass 2 on lanes [b, b + kPackLanes) of the batch.
+template <class Law, bool kUpdate, class Batch>
+[[gnu::always_inline]] inline void evaluate_pack(const Law& law, Batch& batch, int b, int valid,
+                                                 Real* history, Real dt) {
+  using T = LaneReal;
+  constexpr int S = Law::kHistorySize;
+  constexpr int W = kPackLanes;
+  const LaneVec<T> d{load_lanes<T>(batch.dx + b), load_lanes<T>(batch.dy + b),
+                     load_lanes<T>(batch.dz + b)};
+  const T rsum = load_lanes<T>(batch.rsum + b);
+  const T ri = load_lanes<T>(batch.ri + b), rj = load_lanes<T>(batch.rj + b);
+  const T dist = sqrt_lanes(squared_norm(d));
+  const T overlap = rsum - dist;
+  // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
+  const auto apart = dist > 0.0;
+  const LaneVec<T> nrm{select(apart, d.x / dist, splat<T>(0)),
+                       select(apart, d.y / dist, splat<T>(0)),
+                       select(apart, d.z / dist, splat<T>(1))};
+  const T ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
+  const LaneVec<T> wi{load_lanes<T>(batch.wix + b), load_lanes<T>(batch.wiy + b),
+                      load_lanes<T>(batch.wiz + b)};
+  const LaneVec<T> wj{load_lanes<T>(batch.wjx + b), load_lanes<T>(batch.wjy + b),
+                      load_lanes<T>(batch.wjz + b)};
+  const LaneVec<T> dv{load_lanes<T>(batch.dvx + b), load_lanes<T>(batch.dvy + b),
+                      load_lanes<T>(batch.dvz + b)};
+  ContactLanes<T> c{nrm,
+                    overlap,
+                    ri * rj / rsum,
+                    1.0 / load_lanes<T>(batch.inv_mass_sum + b),
+                    dv - cross(ai * wi + aj * wj, nrm),
+                    dt,
+                    LaneVec<T>::zero(),
+                    splat<T>(0)};
+  if constexpr (Law::kRolling) {
+    c.w_rel = {load_lanes<T>(batch.rolling[0] + b), load_lanes<T>(batch.rolling[1] + b),
+               load_lanes<T>(batch.rolling[2] + b)};
+    c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[3] + b);
+  }
+  // The history of each lane, as one value per lane and history slot.
+  alignas(64) Real columns[S][W];
+  const typename Law::Pair* pairs[W];
+  for (int l = 0; l < W; ++l) {
+    pairs[l] = &law.pair_at(batch.pair[b + l]);
+    const Real* hl = history + static_cast<std::size_t>(batch.entry[b + l]) * S;
+    for (int s = 0; s < S; ++s) columns[s][l] = hl[s];
+  }
+  T h[S];
+  for (int s = 0; s < S; ++s) h[s] = load_lanes<T>(columns[s]);
+  ContactLanesOutput<T> out;
+  if constexpr (std::is_same_v<T, Real>)
+    out = law.force_lanes(Param<typename Law::Pair, Real>(*pairs[0]), c, h);
+  else
+    out = law.force_lanes(Param<typename Law::Pair, T>::of(pairs), c, h);
+  if constexpr (kUpdate)
+    for (int l = 0; l < valid; ++l) {
+      Real* hl = history + static_cast<std::size_t>(batch.entry[b + l]) * S;
+      for (int s = 0; s < S; ++s) hl[s] = lane(h[s], l);
+    }
+  const LaneVec<T>& F = out.force;
+  const LaneVec<T> nxf = cross(nrm, F);
+  const LaneVec<T> ti = ai * nxf, tj = aj * nxf;
+  store_lanes(batch.fx + b, F.x);
+  store_lanes(batch.fy + b, F.y);
+  store_lanes(batch.fz + b, F.z);
+  store_lanes(batch.tix + b, ti.x);
+  store_lanes(batch.tiy + b, ti.y);
+  store_lanes(batch.tiz + b, ti.z);
+  store_lanes(batch.tjx + b, tj.x);
+  store_lanes(batch.tjy + b, tj.y);
+  store_lanes(batch.tjz + b, tj.z);
+  if constexpr (Law::kRolling) {
+    store_lanes(batch.rolling_torque[0] + b, out.rolling_torque.x);
+    store_lanes(batch.rolling_torque[1] + b, out.rolling_torque.y);
+    store_lanes(batch.rolling_torque[2] + b, out.rolling_torque.z);
+  }
+  store_lanes(batch.overlap + b, overlap);
+  store_lanes(batch.nx + b, nrm.x);
+  store_lanes(batch.ny + b, nrm.y);
+  store_lanes(batch.nz + b, nrm.z);
+}
+
+}  // namespace detail
+
+// kUpdate = false evaluates forces without advancing the history (set-up evaluations must
 // not advance the tangential springs). kStats fills `stats`.
-// flatten: everything the law calls is inlined. Left to its heuristics, GCC stops inlining
-// small Eigen expressions in the larger laws (EEPA, EPSD), and each call costs more than it does.
+// flatten: everything the law calls is inlined.
 template <class Law, bool kUpdate, bool kStats>
 [[gnu::flatten]] void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list,
                                              Real dt, ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
+  constexpr int W = kPackLanes;
+  using Batch = detail::PairBatch<Law::kRolling ? 4 : 0>;
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
   const Vec3* v = ps.velocity.data();
@@ -33,66 +178,132 @@ template <class Law, bool kUpdate, bool kStats>
   Vec3* t = ps.torque.data();
   const Index* partner = list.partner.data();
   Real* hist = list.history.data();
+  Batch batch;
+
+  // Pass 3 state: the row being summed (its force and torque so far) and the next row whose
+  // end has not been applied. A row with entries ends with f[i] += fi, as in a scalar loop.
+  Index open = -1, next_row = 0;
+  Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+  auto close_rows_before = [&](Index row) {
+    for (; next_row < row; ++next_row) {
+      if (list.first[next_row] == list.first[next_row + 1]) continue;
+      if (next_row == open) {
+        f[open] += fi;
+        t[open] += ti;
+      } else {
+        f[next_row] += Vec3::Zero();  // a row without touching contacts (-0 becomes +0)
+        t[next_row] += Vec3::Zero();
+      }
+    }
+  };
+  auto flush = [&]() {
+    const int count = batch.count;
+    if (count == 0) return;
+    const int end = (count + W - 1) / W * W;
+    if (end > count) batch.pad(end);
+    for (int b = 0; b < end; b += W)
+      detail::evaluate_pack<Law, kUpdate>(law, batch, b, std::min(W, count - b), hist, dt);
+    for (int q = 0; q < count; ++q) {
+      const Index i = batch.i[q], j = batch.j[q];
+      if (i != open) {
+        close_rows_before(i);
+        open = i;
+        fi.setZero();
+        ti.setZero();
+      }
+      const Vec3 F(batch.fx[q], batch.fy[q], batch.fz[q]);
+      const Vec3 tq_i(batch.tix[q], batch.tiy[q], batch.tiz[q]);
+      const Vec3 tq_j(batch.tjx[q], batch.tjy[q], batch.tjz[q]);
+      fi += F;
+      ti -= tq_i;
+      f[j] -= F;
+      t[j] -= tq_j;
+      if constexpr (Law::kRolling) {
+        const Vec3 M(batch.rolling_torque[0][q], batch.rolling_torque[1][q],
+                     batch.rolling_torque[2][q]);
+        ti += M;
+        t[j] -= M;
+      }
+      if constexpr (kStats) {
+        const Real overlap = batch.overlap[q];
+        ++stats.contacts;
+        stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / std::min(r[i], r[j]));
+        if (stats.record)
+          stats.records.push_back(
+              {ps.id[i], ps.id[j], overlap, Vec3(batch.nx[q], batch.ny[q], batch.nz[q]), F, i, j});
+      }
+    }
+    batch.count = 0;
+  };
+
+  std::uint8_t* touching = list.touching.data();
   for (Index i = 0; i < n; ++i) {
     const Index b = list.first[i], e = list.first[i + 1];
     if (b == e) continue;
-    const Vec3 xi = x[i], vi = v[i], wi = w[i];
-    const Real ri = r[i], imi = im[i];
-    const int mi = mat[i];
-    Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-    for (Index k = b; k < e; ++k) {
-      const Index j = partner[k];
-      Real* h = hist + static_cast<std::size_t>(k) * S;
-      const Vec3 d = xi - x[j];
-      const Real rj = r[j];
-      const Real rsum = ri + rj;
-      const Real d2 = d.squaredNorm();
-      if (d2 >= rsum * rsum) {
-        if (kUpdate && list.touching[k]) {
-          std::fill(h, h + S, Real(0));
-          list.touching[k] = 0;
+    const Vec3 xi = x[i];
+    const Real ri = r[i];
+    // The row in pieces that fit the batch (a row is longer only around a much larger sphere).
+    for (Index k0 = b; k0 < e; k0 += Batch::kCapacity) {
+      const Index k1 = std::min<Index>(e, k0 + Batch::kCapacity);
+      if (batch.count + (k1 - k0) > Batch::kCapacity) flush();
+      // The overlap test without a branch per entry (touching or not is unpredictable in a
+      // bed): every entry is written to the next free slot, which only a touching one keeps.
+      int q = batch.count;
+      for (Index k = k0; k < k1; ++k) {
+        const Index j = partner[k];
+        const Vec3 d = xi - x[j];
+        const Real rsum = ri + r[j];
+        const bool touch = d.squaredNorm() < rsum * rsum;
+        batch.j[q] = j;
+        batch.entry[q] = k;
+        batch.dx[q] = d[0];
+        batch.dy[q] = d[1];
+        batch.dz[q] = d[2];
+        batch.rsum[q] = rsum;
+        // A contact that opens or closes (rare, hence predictable): a closed one forgets its
+        // history, as a new contact starts from zero.
+        if (kUpdate && touching[k] != touch) {
+          if (!touch)
+            std::fill(hist + static_cast<std::size_t>(k) * S,
+                      hist + static_cast<std::size_t>(k + 1) * S, Real(0));
+          touching[k] = touch;
         }
-        continue;
+        q += touch;
       }
-      const Real dist = std::sqrt(d2);
-      const Real overlap = rsum - dist;
-      // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
-      const Vec3 nrm = dist > 0 ? Vec3(d / dist) : Vec3(Vec3::UnitZ());
-      const Real ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
-      const Vec3 vrel = vi - v[j] - (ai * wi + aj * w[j]).cross(nrm);
-      ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
-      if constexpr (Law::kRolling) {
-        c.w_rel = wi - w[j];
-        c.rolling_inertia = 1 / (irl[i] + irl[j]);
+      // The rest of each touching contact's inputs.
+      const Vec3 vi = v[i], wi = w[i];
+      const Real imi = im[i];
+      const int mi = mat[i];
+      for (int c = batch.count; c < q; ++c) {
+        const Index j = batch.j[c];
+        batch.i[c] = i;
+        batch.pair[c] = law.pair_index(mi, mat[j]);
+        batch.ri[c] = ri;
+        batch.rj[c] = r[j];
+        const Vec3 dv = vi - v[j];
+        batch.dvx[c] = dv[0];
+        batch.dvy[c] = dv[1];
+        batch.dvz[c] = dv[2];
+        batch.wix[c] = wi[0];
+        batch.wiy[c] = wi[1];
+        batch.wiz[c] = wi[2];
+        batch.wjx[c] = w[j][0];
+        batch.wjy[c] = w[j][1];
+        batch.wjz[c] = w[j][2];
+        batch.inv_mass_sum[c] = imi + im[j];
+        if constexpr (Law::kRolling) {
+          const Vec3 w_rel = wi - w[j];
+          batch.rolling[0][c] = w_rel[0];
+          batch.rolling[1][c] = w_rel[1];
+          batch.rolling[2][c] = w_rel[2];
+          batch.rolling[3][c] = irl[i] + irl[j];
+        }
       }
-      ContactOutput out;
-      if constexpr (kUpdate) {
-        list.touching[k] = 1;
-        out = law.force(law.pair(mi, mat[j]), c, h);
-      } else {
-        std::array<Real, S> scratch;
-        std::copy(h, h + S, scratch.begin());
-        out = law.force(law.pair(mi, mat[j]), c, scratch.data());
-      }
-      const Vec3& F = out.force;
-      const Vec3 nxf = nrm.cross(F);
-      fi += F;
-      ti -= ai * nxf;
-      f[j] -= F;
-      t[j] -= aj * nxf;
-      if constexpr (Law::kRolling) {
-        ti += out.rolling_torque;
-        t[j] -= out.rolling_torque;
-      }
-      if constexpr (kStats) {
-        ++stats.contacts;
-        stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / std::min(ri, rj));
-        if (stats.record) stats.records.push_back({ps.id[i], ps.id[j], overlap, nrm, F, i, j});
-      }
+      batch.count = q;
     }
-    f[i] += fi;
-    t[i] += ti;
   }
+  flush();
+  close_rows_before(n);
 }
 
 }  // namespace grainscale

@@ -12,12 +12,14 @@
 //   tangential spring), |M_k| <= mu_r R* |F_n|;
 //   M_d = -eta_r 2 sqrt(I_r k_r) w_r only while M_k is below the limit.
 // EPSD2 (LIGGGHTS epsd2): as EPSD with k_r = k_t R*^2 and no damping.
+// Written over the lane type T (core/simd_pack.hpp): branches are selects.
 #pragma once
 
 #include <cmath>
 
 #include "contact/contact_input.hpp"
 #include "contact/tangential_models.hpp"
+#include "core/simd_pack.hpp"
 
 namespace grainscale {
 
@@ -26,10 +28,11 @@ struct RollingPair {
   Real damping;   // eta_r
 };
 
+template <class T>
 struct RollingContext {
-  Real normal_force;          // F_n (with damping)
-  Real normal_stiffness;      // k_n
-  Real tangential_stiffness;  // k_t
+  T normal_force;          // F_n (with damping)
+  T normal_stiffness;      // k_n
+  T tangential_stiffness;  // k_t
 };
 
 struct NoRolling {
@@ -37,14 +40,17 @@ struct NoRolling {
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = false;
   static constexpr bool kSpring = false;
-  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair&, const RollingContext&,
-                                              const ContactInput&, Real*) {
-    return Vec3::Zero();
+  template <class T>
+  [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>&,
+                                                    const RollingContext<T>&,
+                                                    const ContactLanes<T>&, LaneVec<T>&) {
+    return LaneVec<T>::zero();
   }
 };
 
-inline Vec3 rolling_velocity(const ContactInput& c) {
-  return c.w_rel - c.w_rel.dot(c.normal) * c.normal;
+template <class T>
+[[gnu::always_inline]] inline LaneVec<T> rolling_velocity(const ContactLanes<T>& c) {
+  return c.w_rel - dot(c.w_rel, c.normal) * c.normal;
 }
 
 struct CDTRolling {
@@ -52,12 +58,16 @@ struct CDTRolling {
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = true;
   static constexpr bool kSpring = false;
-  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
-                                              const ContactInput& c, Real*) {
-    const Vec3 wr = rolling_velocity(c);
-    const Real w = wr.norm();
-    if (w == 0 || k.normal_force <= 0) return Vec3::Zero();
-    return (-p.friction * c.r_eff * k.normal_force / w) * wr;
+  template <class T>
+  [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>& p,
+                                                    const RollingContext<T>& k,
+                                                    const ContactLanes<T>& c, LaneVec<T>&) {
+    const LaneVec<T> wr = rolling_velocity(c);
+    const T w = sqrt_lanes(squared_norm(wr));
+    const auto none = mask_or(w == 0.0, k.normal_force <= 0.0);
+    const LaneVec<T> torque =
+        ((-p.get(&RollingPair::friction)) * c.r_eff * k.normal_force / w) * wr;
+    return select(none, LaneVec<T>::zero(), torque);
   }
 };
 
@@ -67,22 +77,32 @@ struct SpringDashpotRolling {
   static constexpr int kHistorySize = 3;  // spring torque M_k (3-vector)
   static constexpr bool kActive = true;
   static constexpr bool kSpring = true;  // the history is a tangent-plane vector
-  [[gnu::always_inline]] static Vec3 evaluate(const RollingPair& p, const RollingContext& k,
-                                              const ContactInput& c, Real* history) {
-    const Vec3 wr = rolling_velocity(c);
-    const Real r2 = c.r_eff * c.r_eff;
-    const Real kr = kEPSD2 ? k.tangential_stiffness * r2
-                           : 2.25 * k.normal_stiffness * p.friction * p.friction * r2;
-    Eigen::Map<Vec3> spring(history);
-    spring -= (kr * c.dt) * wr;
-    const Real limit = p.friction * c.r_eff * std::abs(k.normal_force);
-    const Real m2 = spring.squaredNorm();  // the square root only when the limit is reached
-    if (m2 > limit * limit) {
-      spring *= limit / std::sqrt(m2);  // fully mobilised: plastic, no damping
+  template <class T>
+  [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>& p,
+                                                    const RollingContext<T>& k,
+                                                    const ContactLanes<T>& c, LaneVec<T>& spring) {
+    const LaneVec<T> wr = rolling_velocity(c);
+    const T mu = p.get(&RollingPair::friction);
+    const T r2 = c.r_eff * c.r_eff;
+    T kr;
+    if constexpr (kEPSD2)
+      kr = k.tangential_stiffness * r2;
+    else
+      kr = 2.25 * k.normal_stiffness * mu * mu * r2;
+    spring = spring - (kr * c.dt) * wr;
+    const T limit = mu * c.r_eff * abs_lanes(k.normal_force);
+    const T m2 = squared_norm(spring);
+    const auto plastic = m2 > limit * limit;  // fully mobilised: no damping
+    if (any(plastic)) spring = select(plastic, spring * (limit / sqrt_lanes(m2)), spring);
+    if constexpr (kEPSD2) {
       return spring;
+    } else {
+      const T eta = p.get(&RollingPair::damping);
+      const auto undamped = mask_or(plastic, eta == 0.0);
+      if (all(undamped)) return spring;
+      const LaneVec<T> damped = spring - (eta * 2.0 * sqrt_lanes(c.rolling_inertia * kr)) * wr;
+      return select(undamped, spring, damped);
     }
-    if (kEPSD2 || p.damping == 0) return spring;
-    return spring - (p.damping * 2 * std::sqrt(c.rolling_inertia * kr)) * wr;
   }
 };
 

@@ -12,13 +12,14 @@
 // SpringRotation::Project only removes the normal component, as LIGGGHTS' tangential history
 // model does (tangential_model_history.h): the spring then shrinks by cos(theta) when the normal
 // turns by theta in a step, a second-order loss that saves a division and a square root.
+// Written over the lane type T (core/simd_pack.hpp): branches are selects.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
 #include "contact/contact_input.hpp"
-#include "core/packed_math.hpp"
+#include "core/simd_pack.hpp"
 
 namespace grainscale {
 
@@ -26,86 +27,65 @@ enum class TangentialHistory { Total, Incremental };
 enum class SpringRotation { Rescale, Project };
 
 // Removes the normal component of a stored tangential vector and restores its magnitude.
-[[gnu::always_inline]] inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
-  const Real sn = s.dot(n);
-  if (sn == 0) return;
-  const Real old2 = s.squaredNorm();
-  s -= sn * n;
-  const Real new2 = s.squaredNorm();
-  if (new2 > 0) s *= std::sqrt(old2 / new2);
+template <class T>
+[[gnu::always_inline]] inline void rotate_into_tangent_plane(LaneVec<T>& s, const LaneVec<T>& n) {
+  const T sn = dot(s, n);
+  const T old2 = squared_norm(s);
+  const LaneVec<T> t = s - sn * n;
+  const T new2 = squared_norm(t);
+  // A lane with new2 = 0 yields inf or NaN in the scaled vector and is not used.
+  const LaneVec<T> scaled = t * sqrt_lanes(old2 / new2);
+  s = select(sn == 0.0, s, select(new2 > 0.0, scaled, t));
 }
 
 // Removes the normal component only (SpringRotation::Project).
-[[gnu::always_inline]] inline void project_onto_tangent_plane(Eigen::Map<Vec3>& s, const Vec3& n) {
-  const Real sn = s.dot(n);
-  if (sn != 0) s -= sn * n;
+template <class T>
+[[gnu::always_inline]] inline void project_onto_tangent_plane(LaneVec<T>& s, const LaneVec<T>& n) {
+  const T sn = dot(s, n);
+  s = select(sn != 0.0, s - sn * n, s);
 }
 
-// The same for two vectors of one contact (tangential and rolling spring), bit for bit as two
-// calls of the above, with both rescale factors from one two-lane division and square root:
-// they are the longest latency of a rolling contact.
-[[gnu::always_inline]] inline void rotate_into_tangent_plane(Eigen::Map<Vec3>& a,
-                                                             Eigen::Map<Vec3>& b, const Vec3& n) {
-  const Real an = a.dot(n), bn = b.dot(n);
-  if (an == 0 && bn == 0) return;
-  const Real a_old2 = a.squaredNorm(), b_old2 = b.squaredNorm();
-  const Vec3 at = a - an * n, bt = b - bn * n;
-  const Real a_new2 = at.squaredNorm(), b_new2 = bt.squaredNorm();
-  // A lane with new2 = 0 yields inf or NaN here and is not used.
-  const RealPair scale = sqrt_ratio2(a_old2, a_new2, b_old2, b_new2);
-  if (an != 0) a = a_new2 > 0 ? Vec3(at * scale.first) : at;
-  if (bn != 0) b = b_new2 > 0 ? Vec3(bt * scale.second) : bt;
-}
-
-// Turns the stored spring(s) of a contact with its normal, as `how` says (the law's setting).
-[[gnu::always_inline]] inline void follow_normal(SpringRotation how, Eigen::Map<Vec3>& s,
-                                                 const Vec3& n) {
+// Turns the stored spring of a contact with its normal, as `how` says (the law's setting).
+template <class T>
+[[gnu::always_inline]] inline void follow_normal(SpringRotation how, LaneVec<T>& s,
+                                                 const LaneVec<T>& n) {
   if (how == SpringRotation::Rescale)
     rotate_into_tangent_plane(s, n);
   else
     project_onto_tangent_plane(s, n);
 }
-[[gnu::always_inline]] inline void follow_normal(SpringRotation how, Eigen::Map<Vec3>& a,
-                                                 Eigen::Map<Vec3>& b, const Vec3& n) {
-  if (how == SpringRotation::Rescale) {
-    rotate_into_tangent_plane(a, b, n);
-  } else {
-    project_onto_tangent_plane(a, n);
-    project_onto_tangent_plane(b, n);
-  }
-}
 
 struct MindlinTangential {
   static constexpr int kHistorySize = 3;  // spring (3-vector)
 
-  // Force on i. kt, gt: stiffness and damping; ft_max = mu max(F_n, 0). The spring in
-  // `history` has been rotated into the current tangent plane.
-  [[gnu::always_inline]] static Vec3 evaluate(TangentialHistory form, Real kt, Real gt, Real ft_max,
-                                              const ContactInput& c, const Vec3& vt,
-                                              Real* history) {
-    Eigen::Map<Vec3> spring(history);
+  // Force on i. kt, gt: stiffness and damping; ft_max = mu max(F_n, 0). The spring has been
+  // rotated into the current tangent plane; it is updated here.
+  template <class T>
+  [[gnu::always_inline]] static LaneVec<T> evaluate(TangentialHistory form, T kt, T gt, T ft_max,
+                                                    const ContactLanes<T>& c, const LaneVec<T>& vt,
+                                                    LaneVec<T>& spring) {
     const bool total = form == TangentialHistory::Total;
-    Vec3 ft;
+    LaneVec<T> ft;
     if (total) {
-      spring += vt * c.dt;
-      ft = -kt * spring - gt * vt;
+      spring = spring + vt * c.dt;
+      ft = (-kt) * spring - gt * vt;
     } else {
-      spring -= (kt * c.dt) * vt;
+      spring = spring - (kt * c.dt) * vt;
       ft = spring - gt * vt;
     }
-    const Real ft2 = ft.squaredNorm();
-    if (ft2 > ft_max * ft_max) {
-      const Real s = spring.norm();
-      if (s > 0) {
-        const Vec3 dir = spring / s;
-        ft = total ? Vec3(-ft_max * dir) : Vec3(ft_max * dir);
-        spring = total ? Vec3((ft_max / kt) * dir) : ft;
-      } else {
-        ft *= ft_max / std::sqrt(ft2);
-        spring = total ? Vec3(-ft / kt) : ft;
-      }
-    }
-    return ft;
+    const T ft2 = squared_norm(ft);
+    const auto sliding = ft2 > ft_max * ft_max;
+    if (!any(sliding)) return ft;
+    // Coulomb limit: along the spring, or (no spring) along the force.
+    const T s = sqrt_lanes(squared_norm(spring));
+    const auto along_spring = s > 0.0;
+    const LaneVec<T> dir = spring / s;
+    const LaneVec<T> ft_spring = total ? (-ft_max) * dir : ft_max * dir;
+    const LaneVec<T> spring_spring = total ? (ft_max / kt) * dir : ft_spring;
+    const LaneVec<T> ft_force = ft * (ft_max / sqrt_lanes(ft2));
+    const LaneVec<T> spring_force = total ? (-ft_force) / kt : ft_force;
+    spring = select(sliding, select(along_spring, spring_spring, spring_force), spring);
+    return select(sliding, select(along_spring, ft_spring, ft_force), ft);
   }
 };
 
