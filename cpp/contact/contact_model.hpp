@@ -77,6 +77,9 @@ class ContactModel {
 
   // Flat index of a material pair in the table (pair_at(pair_index(mi, mj)) == pair(mi, mj)).
   int pair_index(int mi, int mj) const { return mi * stride_ + mj; }
+  // One material (the other index is the rigid walls'): every particle pair is pair 0, and the
+  // pair loop need not read the partners' materials.
+  bool single_material() const { return stride_ <= 2; }
   const Pair& pair_at(int index) const { return pairs_[index]; }
 
   // One contact (the wall loop, tests): the lane form below on T = Real.

@@ -3,21 +3,25 @@
 // GhostExchange. Torque arm: contact radius r - overlap/2 (as LIGGGHTS).
 //
 // Three passes over batches of up to kBatch touching contacts (core/simd_pack.hpp):
-//   1. scan the list in order: the overlap test per entry, without branches (a contact that
-//      closes forgets its history), and for each touching contact its inputs gathered into the
-//      batch, one array per quantity (the random accesses to particle j happen here, once);
+//   1. scan the list in order: the overlap test per entry, without branches in a bed (a
+//      contact that closes forgets its history), and for each touching contact its inputs
+//      gathered into the batch, one array per quantity (the accesses to particle j happen here);
 //   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
 //      square roots of kPackLanes contacts in one instruction each;
 //   3. replay the batch in list order, adding each contact's force and torques to i and j in
 //      exactly the sequence of a one-contact-at-a-time loop.
 // Pass 2 gives the scalar law's bits and pass 3 the scalar loop's summation order, so the
-// forces are the same bits for every lane width (GRAINSCALE_SIMD=OFF builds the one-lane loop).
+// forces are the same bits for every lane width. Where few entries touch, batching costs more
+// than it saves: accumulate_pair_forces (at the end) then takes one contact at a time
+// (pair_loop_one_by_one.hpp), as it always does with GRAINSCALE_SIMD=OFF.
 #pragma once
 
 #include <algorithm>
+#include <type_traits>
 
 #include "contact/contact_input.hpp"
 #include "contact/contact_stats.hpp"
+#include "contact/pair_loop_one_by_one.hpp"
 #include "core/simd_pack.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "state/particle_store.hpp"
@@ -161,8 +165,9 @@ template <class Law, bool kUpdate, class Batch>
 // not advance the tangential springs). kStats fills `stats`.
 // flatten: everything the law calls is inlined.
 template <class Law, bool kUpdate, bool kStats>
-[[gnu::flatten]] void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list,
-                                             Real dt, ContactStats& stats) {
+[[gnu::flatten]] void accumulate_pair_forces_batched(const Law& law, ParticleStore& ps,
+                                                     ContactList& list, Real dt,
+                                                     ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
   constexpr int W = kPackLanes;
   using Batch = detail::PairBatch<Law::kRolling ? 4 : 0>;
@@ -237,6 +242,8 @@ template <class Law, bool kUpdate, bool kStats>
   };
 
   std::uint8_t* touching = list.touching.data();
+  const bool one_material = law.single_material();
+  std::size_t touching_total = 0;
   for (Index i = 0; i < n; ++i) {
     const Index b = list.first[i], e = list.first[i + 1];
     if (b == e) continue;
@@ -252,9 +259,11 @@ template <class Law, bool kUpdate, bool kStats>
       for (Index k = k0; k < k1; ++k) {
         const Index j = partner[k];
         const Vec3 d = xi - x[j];
-        const Real rsum = ri + r[j];
+        const Real rj = r[j];
+        const Real rsum = ri + rj;
         const bool touch = d.squaredNorm() < rsum * rsum;
         batch.j[q] = j;
+        batch.rj[q] = rj;
         batch.entry[q] = k;
         batch.dx[q] = d[0];
         batch.dy[q] = d[1];
@@ -270,6 +279,7 @@ template <class Law, bool kUpdate, bool kStats>
         }
         q += touch;
       }
+      touching_total += q - batch.count;
       // The rest of each touching contact's inputs.
       const Vec3 vi = v[i], wi = w[i];
       const Real imi = im[i];
@@ -277,9 +287,8 @@ template <class Law, bool kUpdate, bool kStats>
       for (int c = batch.count; c < q; ++c) {
         const Index j = batch.j[c];
         batch.i[c] = i;
-        batch.pair[c] = law.pair_index(mi, mat[j]);
+        batch.pair[c] = one_material ? 0 : law.pair_index(mi, mat[j]);
         batch.ri[c] = ri;
-        batch.rj[c] = r[j];
         const Vec3 dv = vi - v[j];
         batch.dvx[c] = dv[0];
         batch.dvy[c] = dv[1];
@@ -304,6 +313,21 @@ template <class Law, bool kUpdate, bool kStats>
   }
   flush();
   close_rows_before(n);
+  if (kUpdate && !list.partner.empty())
+    list.touching_share = static_cast<double>(touching_total) / list.partner.size();
+}
+
+// The pair forces of the owned particles: batched in packs where a good share of the list
+// touches (beds), one contact at a time where few entries do (loose, falling systems). The
+// choice follows the share of the last evaluation and changes the speed, never the result.
+template <class Law, bool kUpdate, bool kStats>
+void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list, Real dt,
+                            ContactStats& stats) {
+  constexpr double kBatchedShare = 0.4;
+  if (kPackLanes > 1 && list.touching_share >= kBatchedShare)
+    accumulate_pair_forces_batched<Law, kUpdate, kStats>(law, ps, list, dt, stats);
+  else
+    accumulate_pair_forces_one_by_one<Law, kUpdate, kStats>(law, ps, list, dt, stats);
 }
 
 }  // namespace grainscale

@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "contact/contact_input.hpp"
 #include "core/simd_pack.hpp"
@@ -30,6 +31,8 @@ enum class SpringRotation { Rescale, Project };
 template <class T>
 [[gnu::always_inline]] inline void rotate_into_tangent_plane(LaneVec<T>& s, const LaneVec<T>& n) {
   const T sn = dot(s, n);
+  if constexpr (std::is_same_v<T, Real>)
+    if (sn == 0) return;  // one contact: skip the division and root (a new contact has no spring)
   const T old2 = squared_norm(s);
   const LaneVec<T> t = s - sn * n;
   const T new2 = squared_norm(t);

@@ -26,6 +26,9 @@ struct ContactList {
   // 1 while the entry touches (its history may be non-zero). Lets the force loop skip the
   // history of the many non-touching entries instead of clearing it every step.
   std::vector<std::uint8_t> touching;
+  // Touching entries / entries at the last force evaluation: whether the pair loop batches
+  // contacts in packs (its choice changes the speed, never the result).
+  double touching_share = 1;
   int history_stride = 0;
   // Build scratch kept between rebuilds (fresh large buffers cost page faults each time).
   std::vector<std::pair<Index, Index>> scratch_pairs;
