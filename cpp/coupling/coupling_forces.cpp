@@ -15,9 +15,9 @@ CouplingForces::CouplingForces(std::shared_ptr<const ExchangeGrid> grid, Real la
     throw_invalid("Exchange.fade", "positive and at most the layer thickness (m)", fade);
 }
 
-template <class Visit, class Push>
-void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Visit&& visit,
-                              Push&& push) const {
+void CouplingForces::locate(const ParticleStore& ps, const Domain& domain) const {
+  inside_.clear();
+  pushes_.clear();
   const FieldGrid& g = grid_->grid();
   const bool pushing = !pressure.empty();
   const Vec3 lo = g.origin, hi = g.upper();
@@ -33,7 +33,7 @@ void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Vis
       continue;  // most particles of a coarse level: far from the fine region
     const int c = g.cell_of(x);
     if (c < 0) continue;
-    visit(i, c);
+    inside_.emplace_back(i, c);
     if (!pushing || !grid_->boundary(c)) continue;
     const Real r = ps.radius[i];
     for (int f : grid_->faces_of(c)) {
@@ -48,14 +48,14 @@ void CouplingForces::for_each(const ParticleStore& ps, const Domain& domain, Vis
         const Real q = std::sin(0.5 * M_PI * (layer_ - s) / fade_);
         w = q * q;
       }
-      push(i, f, p * M_PI * r * r * w, s);
+      pushes_.push_back({i, f, p * M_PI * r * r * w, s});
     }
   }
 }
 
-std::vector<Real> CouplingForces::push_total(const ParticleStore& ps, const Domain& domain) const {
+std::vector<Real> CouplingForces::push_total() const {
   std::vector<Real> total(grid_->faces().size(), 0.0);
-  for_each(ps, domain, [](Index, int) {}, [&](Index, int f, Real m, Real) { total[f] += m; });
+  for (const Push& p : pushes_) total[p.face] += p.magnitude;
   return total;
 }
 
@@ -67,38 +67,28 @@ std::vector<Real> CouplingForces::push_scale(const std::vector<Real>& total) con
   return scale;
 }
 
-void CouplingForces::apply(ParticleStore& ps, const Domain& domain, Real dt,
-                           const std::vector<Real>& scale) const {
-  const bool feedback = !acceleration.empty();
-  if (!feedback && pressure.empty()) return;
+void CouplingForces::apply(ParticleStore& ps, Real dt, const std::vector<Real>& scale) const {
   const bool limited = !velocity_min.empty();
+  if (!acceleration.empty())
+    for (const auto& [i, c] : inside_) {
+      Vec3 a = acceleration[c];
+      if (limited)
+        for (int k = 0; k < 3; ++k) {
+          if (a[k] == 0) continue;
+          const Real room = a[k] > 0 ? velocity_max[c][k] - ps.velocity[i][k]
+                                     : velocity_min[c][k] - ps.velocity[i][k];
+          a[k] *= std::clamp(room / (a[k] * dt), Real(0), Real(1));
+        }
+      ps.force[i] += ps.mass[i] * a;
+    }
   const auto& faces = grid_->faces();
-  for_each(
-      ps, domain,
-      [&](Index i, int c) {
-        if (!feedback) return;
-        Vec3 a = acceleration[c];
-        if (limited)
-          for (int k = 0; k < 3; ++k) {
-            if (a[k] == 0) continue;
-            const Real room = a[k] > 0 ? velocity_max[c][k] - ps.velocity[i][k]
-                                       : velocity_min[c][k] - ps.velocity[i][k];
-            a[k] *= std::clamp(room / (a[k] * dt), Real(0), Real(1));
-          }
-        ps.force[i] += ps.mass[i] * a;
-      },
-      [&](Index i, int f, Real magnitude, Real) {
-        ps.force[i] += scale[f] * magnitude * faces[f].normal;
-      });
+  for (const Push& p : pushes_)
+    ps.force[p.particle] += scale[p.face] * p.magnitude * faces[p.face].normal;
 }
 
-std::vector<Real> CouplingForces::push_moment(const ParticleStore& ps, const Domain& domain,
-                                              const std::vector<Real>& scale) const {
+std::vector<Real> CouplingForces::push_moment(const std::vector<Real>& scale) const {
   std::vector<Real> moment(grid_->faces().size(), 0.0);
-  if (pressure.empty()) return moment;
-  for_each(
-      ps, domain, [](Index, int) {},
-      [&](Index, int f, Real magnitude, Real s) { moment[f] += scale[f] * magnitude * s; });
+  for (const Push& p : pushes_) moment[p.face] += scale[p.face] * p.magnitude * p.depth;
   return moment;
 }
 

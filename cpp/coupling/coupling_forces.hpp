@@ -50,28 +50,36 @@ class CouplingForces {
   // p pi r^2 w is scaled by p A / sum(p pi r^2 w) over the layer (at most kMaxPushScale, so that
   // a few particles in an almost empty layer are not shot into the bed).
   static constexpr Real kMaxPushScale = 4;
-  // Per interface face: sum over the owned particles of p pi r^2 w (N), this rank only (needs
+  // One pass over the owned particles of `ps`: the cell of each one inside the grid and every
+  // push it feels, kept for the calls below, which act on the particles as last located (the
+  // cell lookup is the main cost of the coupling forces: once per step, not once per call).
+  void locate(const ParticleStore& ps, const Domain& domain) const;
+  // Per interface face: sum over the located particles of p pi r^2 w (N), this rank only (needs
   // `pressure` set).
-  std::vector<Real> push_total(const ParticleStore& ps, const Domain& domain) const;
+  std::vector<Real> push_total() const;
   // Per interface face: the scale of its push, from the totals summed over every rank (needs
   // `pressure` set).
   std::vector<Real> push_scale(const std::vector<Real>& total) const;
   // Adds the forces to the owned particles of `ps` (dt: the level's time step, for the limiter;
   // scale: push_scale of the rank-summed push_total, read only when `pressure` is set).
-  void apply(ParticleStore& ps, const Domain& domain, Real dt,
-             const std::vector<Real>& scale) const;
-  // Per interface face: sum over the owned particles of |F_push| s (N m), this rank only.
-  std::vector<Real> push_moment(const ParticleStore& ps, const Domain& domain,
-                                const std::vector<Real>& scale) const;
+  // Each particle gets its feedback force first, then its pushes face by face.
+  void apply(ParticleStore& ps, Real dt, const std::vector<Real>& scale) const;
+  // Per interface face: sum over the located particles of |F_push| s (N m), this rank only.
+  std::vector<Real> push_moment(const std::vector<Real>& scale) const;
 
  private:
   std::shared_ptr<const ExchangeGrid> grid_;
   Real layer_ = 0, fade_ = 0;
 
-  // Calls visit(i, cell) for every owned particle inside the grid, and push(i, face, |F|, s)
-  // for every push it feels.
-  template <class Visit, class Push>
-  void for_each(const ParticleStore& ps, const Domain& domain, Visit&& visit, Push&& push) const;
+  struct Push {
+    Index particle;
+    int face;
+    Real magnitude;  // p pi r^2 w (N), before the face's scale
+    Real depth;      // s (m)
+  };
+  // Of the last locate(), in particle order: (particle, cell) inside the grid, and the pushes.
+  mutable std::vector<std::pair<Index, int>> inside_;
+  mutable std::vector<Push> pushes_;
 };
 
 }  // namespace grainscale

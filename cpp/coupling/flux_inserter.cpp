@@ -90,9 +90,10 @@ void FluxInserter::settle() {
 }
 
 std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
-                                std::vector<Vec3>& position, std::vector<Real>& radius) {
+                                const Domain& domain, std::vector<Vec3>& position,
+                                std::vector<Real>& radius) {
   const std::size_t before = radius.size();
-  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius);
+  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius, &domain);
   for (std::size_t k = before; k < radius.size(); ++k) inserted_mass_ += mass_of(radius[k]);
   if (advance_budget_ > 0 && pending_.empty()) {
     // Ahead of the flux, up to the budget, by the same placement rule; what finds no room
@@ -105,7 +106,7 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
       extra.push_back(r);
     }
     const std::size_t start = radius.size();
-    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius);
+    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius, &domain);
     for (std::size_t k = start; k < radius.size(); ++k) {
       inserted_mass_ += mass_of(radius[k]);
       advanced_mass_ += mass_of(radius[k]);

@@ -77,9 +77,10 @@ class FluxInserter {
   const Region& placing_region() const { return placing_; }
   Real max_radius() const { return radius_.max_radius(); }
   // Places scheduled particles (in order), then, if none waits, up to the advance budget; placed
-  // ones are appended. Returns how many.
-  std::size_t place(OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
-                    std::vector<Real>& radius);
+  // ones are appended. Returns how many. Centres stay inside `domain` (the placing region,
+  // widened past the face's edges, may reach beyond a closed side where a region face lies).
+  std::size_t place(OccupancyGrid& grid, const WallClearance& walls, const Domain& domain,
+                    std::vector<Vec3>& position, std::vector<Real>& radius);
   bool waiting() const { return !pending_.empty() || advance_budget_ > 0; }
 
   std::int32_t material() const { return material_; }

@@ -27,7 +27,7 @@ std::int64_t insert_flux(Level& level, std::vector<FluxInserter>& inserters) {
     if (!f.waiting()) continue;
     x.clear();
     r.clear();
-    f.place(site.grid, site.walls, x, r);
+    f.place(site.grid, site.walls, level.domain(), x, r);
     if (r.empty()) continue;
     level.place_particles(x, r, f.velocity(), &f.spin(), f.material());
     placed += static_cast<std::int64_t>(r.size());

@@ -10,13 +10,15 @@ namespace grainscale {
 
 void CouplingHook::apply(ParticleStore& ps, const Domain& domain, Real dt,
                          const Communicator& comm) {
-  forces_.apply(ps, domain, dt, coupling_push_scale(forces_, ps, domain, comm));
+  const std::vector<Real> scale = coupling_push_scale(forces_, ps, domain, comm);
+  forces_.apply(ps, dt, scale);
 }
 
 std::vector<Real> coupling_push_scale(const CouplingForces& c, const ParticleStore& ps,
                                       const Domain& domain, const Communicator& comm) {
+  c.locate(ps, domain);
   if (c.pressure.empty()) return {};  // no stress condition (every rank alike): nothing pushed
-  std::vector<Real> total = c.push_total(ps, domain);
+  std::vector<Real> total = c.push_total();
   comm.sum_in_place(total);
   return c.push_scale(total);
 }
@@ -36,8 +38,7 @@ CouplingForces& coupling(Level& level, int index) {
 std::vector<Real> coupling_push_moment(Level& level, int index) {
   const CouplingForces& c = coupling(level, index);
   std::vector<Real> moment =
-      c.push_moment(level.particles(), level.domain(),
-                    coupling_push_scale(c, level.particles(), level.domain(), level.comm()));
+      c.push_moment(coupling_push_scale(c, level.particles(), level.domain(), level.comm()));
   level.comm().sum_in_place(moment);
   return moment;
 }

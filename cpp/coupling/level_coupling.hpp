@@ -22,7 +22,8 @@ class CouplingHook final : public ForceHook {
   CouplingForces forces_;
 };
 
-// The scale of each face's push (collective: sums the push totals over the ranks).
+// Locates the particles of `ps` for `c` and returns the scale of each face's push (collective:
+// sums the push totals over the ranks).
 std::vector<Real> coupling_push_scale(const CouplingForces& c, const ParticleStore& ps,
                                       const Domain& domain, const Communicator& comm);
 // Adds coupling forces to `level` (applied every step after the force reset); returns the index.

@@ -1,7 +1,8 @@
 // Random sequential placement of waiting particles in a region (stream batches, the flux
 // insertion of a hierarchy's fine level): first come, first served, each tried at up to
 // `max_attempts` random centres of `region`, kept where it overlaps no sphere of `grid` and
-// touches no wall. A run of 32 consecutive failures means the region is full: the rest waits.
+// touches no wall (and, given a domain, whose centre lies inside it along its closed axes). A
+// run of 32 consecutive failures means the region is full: the rest waits.
 #pragma once
 
 #include <istream>
@@ -12,6 +13,7 @@
 #include "insert/random.hpp"
 #include "insert/region.hpp"
 #include "insert/wall_clearance.hpp"
+#include "state/domain.hpp"
 
 namespace grainscale {
 
@@ -19,7 +21,7 @@ namespace grainscale {
 // grid and removed from `pending` (the others keep their order).
 void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
                    OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
-                   std::vector<Real>& radius);
+                   std::vector<Real>& radius, const Domain* domain = nullptr);
 
 // The waiting radii and the placement engine in a checkpoint text (" n r_1 ... r_n <engine>",
 // shared by the stream and the flux inserters); read_pending leaves `in` failed on bad text.

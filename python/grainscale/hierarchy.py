@@ -56,6 +56,7 @@ import dataclasses
 import json
 import math
 import os
+import time
 from collections.abc import Sequence
 from typing import Any, cast
 
@@ -105,6 +106,9 @@ class Hierarchy(StrictAttributes):
     A finer level starts empty and receives what its parent carries across the interface: the
     parent may hold no particles in the region at the start (fill by a Stream), and a region
     keeps clear of its parent's own interface (the parent's insertion shells) by a shell depth.
+
+    ``wall_clock`` holds where this rank's time went (s): ``levels``, per level, stepping it,
+    and ``exchange``, the rest of the intervals (fields, controllers, insertion, books).
     """
 
     def __init__(
@@ -153,6 +157,8 @@ class Hierarchy(StrictAttributes):
         check_nesting(self.couplings, self.parents, self.sizes, bounds)
         self._refuse_initial_shadow()
         self.intervals = 0
+        # Wall-clock (s, this rank) stepping each level and in the exchanges: where time goes.
+        self.wall_clock: dict[str, Any] = {"levels": [0.0] * len(levels), "exchange": 0.0}
         self._cell_output: dict[str, Any] | None = None
         self.initial_mass = sum(self._held())
         self._freeze_attributes()
@@ -423,6 +429,7 @@ class Hierarchy(StrictAttributes):
             self._interval()
 
     def _interval(self) -> None:
+        start, stepped = time.perf_counter(), sum(self.wall_clock["levels"])
         for sim in self.sims:  # before the exchange touches any level's particles
             sim.engine.check_unseen_writes()
         for k, sim in enumerate(self.sims):
@@ -444,7 +451,9 @@ class Hierarchy(StrictAttributes):
             done = 0
             for s in range(samples):
                 n = (self.steps[k] * (s + 1)) // samples - done
+                t0 = time.perf_counter()
                 sim.run(steps=n, progress=False)
+                self.wall_clock["levels"][k] += time.perf_counter() - t0
                 done += n
                 for c in touching:
                     c.interface.sample(level, c.child == k)
@@ -464,6 +473,8 @@ class Hierarchy(StrictAttributes):
             self._settle(c)
         self.intervals += 1
         self._write_cells()
+        stepping = sum(self.wall_clock["levels"]) - stepped
+        self.wall_clock["exchange"] += time.perf_counter() - start - stepping
 
     def _settle(self, c: Coupling) -> None:
         """Books what the child removed this interval and lets the parent pay the part of its

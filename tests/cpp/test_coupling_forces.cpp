@@ -47,8 +47,9 @@ Real total_push(int step_x, int step_y) {
       ps.add_owned(id++, Vec3(1e-3 + 2e-3 * i, 1e-3 + 2e-3 * j, kBox - 1.2e-3), Vec3::Zero(),
                    Vec3::Zero(), kRadius, 1e-5, 1e-12, 0);
   for (gs::Index i = 0; i < ps.n_local(); ++i) ps.force[i].setZero();
-  const std::vector<Real> scale = forces.push_scale(forces.push_total(ps, domain));
-  forces.apply(ps, domain, 1e-6, scale);
+  forces.locate(ps, domain);
+  const std::vector<Real> scale = forces.push_scale(forces.push_total());
+  forces.apply(ps, 1e-6, scale);
   Real fz = 0;
   for (gs::Index i = 0; i < ps.n_owned(); ++i) fz += ps.force[i][2];
   return fz;
