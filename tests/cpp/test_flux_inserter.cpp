@@ -6,7 +6,10 @@
 //                            grains straddling the rectangle's edges, and a solid fraction of the
 //                            shell (face area x depth) of at least 0.35 (0.43 measured; whole
 //                            grains inside the rectangle gave 0.28);
-//   books_stay_exact        – fed = inserted + pending after placement, what waits is booked.
+//   books_stay_exact        – fed = inserted + pending after placement, what waits is booked;
+//   stays_in_the_domain     – where the face's band reaches past a closed side of the domain (the
+//                            band is widened past the face's edges), no centre is placed
+//                            outside it; along a periodic axis the side does not stop placement.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -16,6 +19,9 @@
 #include "expect.hpp"
 #include "field/exchange_grid.hpp"
 #include "insert/occupancy_grid.hpp"
+#include "insert/placement.hpp"
+#include "insert/random.hpp"
+#include "insert/region.hpp"
 #include "insert/size_distribution.hpp"
 #include "insert/wall_clearance.hpp"
 #include "state/domain.hpp"
@@ -49,14 +55,15 @@ gs::FluxInserter top_face_inserter(gs::InterfaceFace& face, gs::FieldGrid& grid)
                           0.0, 42);
 }
 
-Placed place_all(gs::FluxInserter& ins) {
+Placed place_all(gs::FluxInserter& ins,
+                 const gs::Domain& domain = gs::Domain(Vec3::Constant(-1), Vec3::Constant(1),
+                                                       {false, false, false})) {
   Vec3 lo, hi;
   ins.placing_region().bounds(lo, hi);
-  const gs::Domain domain(Vec3::Constant(-1), Vec3::Constant(1), {false, false, false});
   gs::OccupancyGrid grid(lo, hi, kRadius, 0.0, gs::SphereSet{}, domain);
   const gs::WallClearance walls;
   Placed p;
-  ins.place(grid, walls, p.x, p.r);
+  ins.place(grid, walls, domain, p.x, p.r);
   return p;
 }
 
@@ -100,11 +107,37 @@ void test_books_stay_exact() {
          "fed = inserted + pending");
 }
 
+void test_stays_in_the_domain() {
+  // A placement region reaching 5 mm past the domain's side x = 0 (a face's band widened past
+  // its edges where the face lies on that side).
+  const gs::Region region = gs::Region::box(Vec3(-5e-3, 0, 0), Vec3(5e-3, 1e-2, 1e-2));
+  const gs::Domain open(Vec3::Constant(-1), Vec3::Constant(1), {false, false, false});
+  for (const bool periodic : {false, true}) {
+    const gs::Domain domain(Vec3(0, -1, -1), Vec3(1, 1, 1), {periodic, false, false});
+    gs::OccupancyGrid grid(Vec3(-5e-3, 0, 0), Vec3(5e-3, 1e-2, 1e-2), kRadius, 0.0, gs::SphereSet{},
+                           open);
+    std::vector<Real> pending(40, kRadius);
+    gs::Rng rng(7);
+    Placed p;
+    gs::place_pending(pending, region, 50, rng, grid, gs::WallClearance{}, p.x, p.r, &domain);
+    int beyond = 0;
+    for (const Vec3& x : p.x) beyond += x[0] < 0;
+    std::printf("stays_in_the_domain: periodic %d, %zu placed, %d beyond x = 0\n", periodic,
+                p.x.size(), beyond);
+    EXPECT(p.x.size() >= 10, "grains placed");
+    if (periodic)
+      EXPECT(beyond > 0, "a periodic side does not stop placement");
+    else
+      EXPECT(beyond == 0, "no centre beyond a closed side, got " + std::to_string(beyond));
+  }
+}
+
 }  // namespace
 
 int main() {
   test_carries_a_dense_inflow();
   test_books_stay_exact();
+  test_stays_in_the_domain();
   const int failed = test_support::g_failures;
   std::printf("test_flux_inserter: %d checks, %d failed\n", test_support::g_checks, failed);
   return failed == 0 ? 0 : 1;
