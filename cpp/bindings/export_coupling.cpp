@@ -246,7 +246,8 @@ void export_coupling(py::module_& m) {
             for (std::size_t k = 0; k < ins.size(); ++k) ins[k].allow_advance(m[k]);
           },
           py::arg("mass"))
-      .def("insert", &Interface::insert, py::arg("child"), py::call_guard<py::gil_scoped_release>())
+      .def("insert", &Interface::insert, py::arg("child"), py::arg("parent"),
+           py::call_guard<py::gil_scoped_release>())
       .def("inserter_status",
            [](const Interface& it) {
              const auto& ins = it.inserters();

@@ -22,6 +22,7 @@ FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
   Vec3 e1 = Vec3::Zero(), e2 = Vec3::Zero();
   e1[b] = grid.edge[b];
   e2[c] = grid.edge[c];
+  face_size_ = std::max(grid.edge[b], grid.edge[c]);
   const Vec3 corner = face.centre - 0.5 * e1 - 0.5 * e2;
   const Real depth = std::min(4 * radius.max_radius(), grid.edge[a]);
   // From r_min outside the face: centres reach the face (see the header).
@@ -90,10 +91,10 @@ void FluxInserter::settle() {
 }
 
 std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
-                                const Domain& domain, std::vector<Vec3>& position,
-                                std::vector<Real>& radius) {
+                                const Domain& domain, const MaterialSight& parent,
+                                std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
-  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius, &domain);
+  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius, &domain, &parent);
   for (std::size_t k = before; k < radius.size(); ++k) inserted_mass_ += mass_of(radius[k]);
   if (advance_budget_ > 0 && pending_.empty()) {
     // Ahead of the flux, up to the budget, by the same placement rule; what finds no room
@@ -106,7 +107,7 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
       extra.push_back(r);
     }
     const std::size_t start = radius.size();
-    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius, &domain);
+    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius, &domain, &parent);
     for (std::size_t k = start; k < radius.size(); ++k) {
       inserted_mass_ += mass_of(radius[k]);
       advanced_mass_ += mass_of(radius[k]);

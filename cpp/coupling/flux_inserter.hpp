@@ -43,6 +43,7 @@
 
 #include "field/exchange_grid.hpp"
 #include "insert/occupancy_grid.hpp"
+#include "insert/placement.hpp"
 #include "insert/random.hpp"
 #include "insert/region.hpp"
 #include "insert/size_distribution.hpp"
@@ -76,11 +77,18 @@ class FluxInserter {
   const Region& shell() const { return shell_; }
   const Region& placing_region() const { return placing_; }
   Real max_radius() const { return radius_.max_radius(); }
+  // The longer edge of the face (m).
+  Real face_size() const { return face_size_; }
   // Places scheduled particles (in order), then, if none waits, up to the advance budget; placed
   // ones are appended. Returns how many. Centres stay inside `domain` (the placing region,
-  // widened past the face's edges, may reach beyond a closed side where a region face lies).
+  // widened past the face's edges, may reach beyond a closed side where a region face lies), and
+  // where the parent's material reaches (`parent`: its particles there, MaterialSight): a child
+  // grain never goes where no parent grain can be, under a floor or behind a curved wall that a
+  // face's cell straddles, which the clearance test alone does not tell from the bed's side
+  // (studies/silo_industrial/NOTES.md).
   std::size_t place(OccupancyGrid& grid, const WallClearance& walls, const Domain& domain,
-                    std::vector<Vec3>& position, std::vector<Real>& radius);
+                    const MaterialSight& parent, std::vector<Vec3>& position,
+                    std::vector<Real>& radius);
   bool waiting() const { return !pending_.empty() || advance_budget_ > 0; }
 
   std::int32_t material() const { return material_; }
@@ -113,6 +121,7 @@ class FluxInserter {
   Real density_ = 0;
   std::int32_t material_ = 0;
   Real spin_scale_ = 1;
+  Real face_size_ = 0;
   Real deadband_ = 0;
   Region shell_ = Region::box(Vec3::Zero(), Vec3::Ones());    // extraction: centres on the face
   Region placing_ = Region::box(Vec3::Zero(), Vec3::Ones());  // placement: spheres may straddle

@@ -12,7 +12,9 @@ namespace grainscale {
 
 // Collective: places what the inserters owe (each its scheduled particles, in order; every rank
 // the same particles, each keeps its own) with their velocity and spin, in one occupancy grid
-// over every shell with particles waiting; returns the number placed.
-std::int64_t insert_flux(Level& level, std::vector<FluxInserter>& inserters);
+// over every shell with particles waiting, where the material of `parent` (the level whose
+// crossings the inserters booked; collective over its ranks as well) reaches: within a face's
+// size of a parent grain, no wall between them (MaterialSight); returns the number placed.
+std::int64_t insert_flux(Level& level, const Level& parent, std::vector<FluxInserter>& inserters);
 
 }  // namespace grainscale

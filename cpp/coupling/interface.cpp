@@ -114,7 +114,9 @@ Real Interface::extract(Level& child) {
   return removed;
 }
 
-std::int64_t Interface::insert(Level& child) { return insert_flux(child, inserters_); }
+std::int64_t Interface::insert(Level& child, const Level& parent) {
+  return insert_flux(child, parent, inserters_);
+}
 
 Real Interface::remove_shadow(Level& parent, std::vector<Real> excess, const Vec3& near,
                               Real budget) {

@@ -61,8 +61,9 @@ class Interface {
   // Collective: pays the faces' debts by removing the child's particles in each indebted face's
   // shell, nearest the face first; returns the mass removed (kg).
   Real extract(Level& child);
-  // Collective: places what the faces owe the child; returns the number of particles placed.
-  std::int64_t insert(Level& child);
+  // Collective (over both levels): places what the faces owe the child, only where the parent's
+  // material reaches (insert_flux); returns the number of particles placed.
+  std::int64_t insert(Level& child, const Level& parent);
   // Collective: removes parent particles in the region cells, one at a time while the next one's
   // mass fits the remaining `budget` (kg), each from the cell with the largest remaining
   // `excess` (kg per grid cell: how much more the parent holds there than the child; reduced by

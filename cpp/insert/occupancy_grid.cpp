@@ -131,4 +131,23 @@ bool OccupancyGrid::covers(const Vec3& lo, const Vec3& hi, Real r) const {
   return false;
 }
 
+bool OccupancyGrid::nearest(const Vec3& x, Real reach, Vec3& centre) const {
+  const int c = cell_of(x);
+  const int cx = c % dims_[0], cy = (c / dims_[0]) % dims_[1], cz = c / (dims_[0] * dims_[1]);
+  Real best = reach * reach;
+  bool found = false;
+  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dims_[2] - 1); ++z)
+    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dims_[1] - 1); ++y)
+      for (int xx = std::max(cx - 1, 0); xx <= std::min(cx + 1, dims_[0] - 1); ++xx)
+        for (int k = head_[xx + dims_[0] * (y + dims_[1] * z)]; k >= 0; k = next_[k]) {
+          const Real d2 = (x_[k] - x).squaredNorm();
+          if (d2 < best) {
+            best = d2;
+            centre = x_[k];
+            found = true;
+          }
+        }
+  return found;
+}
+
 }  // namespace grainscale

@@ -4,12 +4,17 @@ namespace grainscale {
 
 void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
                    OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
-                   std::vector<Real>& radius, const Domain* domain) {
+                   std::vector<Real>& radius, const Domain* domain, const MaterialSight* sight) {
   const auto in_domain = [domain](const Vec3& x) {
     if (domain == nullptr) return true;
     for (int a = 0; a < 3; ++a)
       if (!domain->periodic[a] && !domain->inside(x, a)) return false;
     return true;
+  };
+  const auto in_sight = [sight](const Vec3& x) {
+    if (sight == nullptr) return true;
+    Vec3 from;
+    return sight->material.nearest(x, sight->reach, from) && !sight->walls.separates(x, from);
   };
   const int give_up_after = 32;
   int failures = 0;
@@ -21,7 +26,7 @@ void place_pending(std::vector<Real>& pending, const Region& region, int max_att
     for (int attempt = 0; attempt < max_attempts && !ok; ++attempt) {
       const Vec3 x = region.sample(rng, r);
       if ((region.samples_inside() || region.contains(x, r)) && in_domain(x) &&
-          !grid.overlaps(x, r) && walls.clear(x, r)) {
+          !grid.overlaps(x, r) && walls.clear(x, r) && in_sight(x)) {
         grid.add(x, r);
         position.push_back(x);
         radius.push_back(r);

@@ -1,5 +1,6 @@
 #include "insert/wall_clearance.hpp"
 
+#include "geometry/segment_crossing.hpp"
 #include "geometry/wall_distance.hpp"
 
 namespace grainscale {
@@ -48,6 +49,22 @@ bool WallClearance::blocks(const Vec3& x, Real reach, Real r) const {
   for (const MeshPart& part : meshes_) {
     part.bins.candidates(x, scratch_);
     if (mesh_distance(*part.mesh, scratch_, x, r - reach) + reach < r) return true;
+  }
+  return false;
+}
+
+bool WallClearance::separates(const Vec3& a, const Vec3& b) const {
+  for (const Wall* w : simple_)
+    if (segment_crosses(*w, a, b)) return true;
+  for (const MeshPart& part : meshes_) {
+    part.bins.candidates(a.cwiseMin(b), a.cwiseMax(b), scratch_);
+    const TriangleMesh& m = *part.mesh;
+    for (int t : scratch_) {
+      const auto& tri = m.triangles[t];
+      if (segment_crosses_triangle(a, b, m.vertices[tri[0]], m.vertices[tri[1]],
+                                   m.vertices[tri[2]]))
+        return true;
+    }
   }
   return false;
 }

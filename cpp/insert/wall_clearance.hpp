@@ -26,6 +26,9 @@ class WallClearance {
   // Whether every sphere of radius r (<= max_radius) centred within `reach` of x touches one
   // single wall: no free centre can lie in that ball (lets a voxel sampler drop it).
   bool blocks(const Vec3& x, Real reach, Real r) const;
+  // Whether a wall lies across the segment [a, b] (geometry/segment_crossing.hpp); complete for
+  // segments inside [lo, hi] grown by max_radius.
+  bool separates(const Vec3& a, const Vec3& b) const;
 
  private:
   struct MeshPart {

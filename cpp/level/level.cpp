@@ -259,4 +259,10 @@ InsertionSite Level::insertion_site(const Vec3& lo, const Vec3& hi, Real max_new
                        WallClearance(walls_.walls(), lo, hi, max_new_radius)};
 }
 
+OccupancyGrid Level::spheres_near(const Vec3& lo, const Vec3& hi, Real reach) const {
+  Real r_old = 0;
+  const SphereSet present = partition_.gather_nearby(lo, hi, reach, r_old, ps_, domain_, comm_);
+  return OccupancyGrid(lo, hi, reach, r_old, present, domain_);
+}
+
 }  // namespace grainscale

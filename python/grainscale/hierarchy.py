@@ -445,7 +445,7 @@ class Hierarchy(StrictAttributes):
                     c.flux = None
                     c.interface.extract(level)
                     c.interface.allow_advance(c.advance.budget)
-                    c.interface.insert(level)
+                    c.interface.insert(level, self.sims[c.parent].engine.core)
             touching = [c for c in self.couplings if c.parent == k or c.child == k]
             samples = min(self.exchange.samples, self.steps[k])
             done = 0
