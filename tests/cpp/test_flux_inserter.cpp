@@ -96,12 +96,17 @@ Placed place_all(gs::FluxInserter& ins, const gs::SphereSet* parent = nullptr,
   return p;
 }
 
+// top_face_inserter fed `grains` grains' worth of mass at once, falling at 0.1 m/s.
+gs::FluxInserter fed_inserter(gs::InterfaceFace& face, gs::FieldGrid& grid, Real grains) {
+  gs::FluxInserter ins = top_face_inserter(face, grid);
+  ins.feed(grains * ins.mass_of(kRadius), Vec3(0, 0, -0.1), Vec3::Zero());
+  return ins;
+}
+
 void test_carries_a_dense_inflow() {
   gs::InterfaceFace face;
   gs::FieldGrid grid;
-  gs::FluxInserter ins = top_face_inserter(face, grid);
-  const Real grain = ins.mass_of(kRadius);
-  ins.feed(200 * grain, Vec3(0, 0, -0.1), Vec3::Zero());
+  gs::FluxInserter ins = fed_inserter(face, grid, 200);
   const Placed p = place_all(ins);
   const Real depth = 4 * kRadius;  // the shell's depth inside the face (cell deeper than 4 r)
   bool straddles = false;
@@ -164,9 +169,8 @@ void test_stays_in_the_domain() {
 void test_goes_where_the_parent_reaches() {
   gs::InterfaceFace face;
   gs::FieldGrid grid;
-  gs::FluxInserter ins = top_face_inserter(face, grid);
+  gs::FluxInserter ins = fed_inserter(face, grid, 200);
   const Real grain = ins.mass_of(kRadius);
-  ins.feed(200 * grain, Vec3(0, 0, -0.1), Vec3::Zero());
   const gs::SphereSet none;
   const Placed empty = place_all(ins, &none);
   EXPECT(empty.x.empty(),
@@ -198,8 +202,7 @@ void test_goes_where_the_parent_reaches() {
   EXPECT(p.x.size() >= 5, "grains placed where the parent is");
   EXPECT(beyond == 0, "no grain behind the wall, got " + std::to_string(beyond));
   // The same without the wall: the parent's reach alone does not stop the other side.
-  gs::FluxInserter open_ins = top_face_inserter(face, grid);
-  open_ins.feed(200 * grain, Vec3(0, 0, -0.1), Vec3::Zero());
+  gs::FluxInserter open_ins = fed_inserter(face, grid, 200);
   const Placed q = place_all(open_ins, &half);
   int across = 0;
   for (const Vec3& x : q.x) across += x[0] > split;
