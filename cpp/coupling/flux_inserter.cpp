@@ -9,6 +9,18 @@
 
 namespace grainscale {
 
+namespace {
+
+// Random centres tried per grain, and grains in a row that find none before a face gives up
+// until the next interval. A face is filled again every interval (10^4 intervals in a run): a
+// shell with no room for four grains in a row is full, and the 32 a one-off batch allows
+// (placement.hpp) cost the industrial silo most of its exchange time in futile centres
+// (studies/silo_industrial/NOTES.md). What finds no room waits; nothing is dropped.
+constexpr int kAttempts = 50;
+constexpr int kGiveUpAfter = 4;
+
+}  // namespace
+
 FluxInserter::FluxInserter(const InterfaceFace& face, const FieldGrid& grid,
                            const SizeDistribution& radius, Real density, std::int32_t material,
                            Real spin_scale, Real deadband, std::uint64_t seed)
@@ -94,7 +106,8 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
                                 const Domain& domain, const MaterialSight& parent,
                                 std::vector<Vec3>& position, std::vector<Real>& radius) {
   const std::size_t before = radius.size();
-  place_pending(pending_, placing_, 50, rng_, grid, walls, position, radius, &domain, &parent);
+  place_pending(pending_, placing_, kAttempts, rng_, grid, walls, position, radius, &domain,
+                &parent, kGiveUpAfter);
   for (std::size_t k = before; k < radius.size(); ++k) inserted_mass_ += mass_of(radius[k]);
   if (advance_budget_ > 0 && pending_.empty()) {
     // Ahead of the flux, up to the budget, by the same placement rule; what finds no room
@@ -107,7 +120,8 @@ std::size_t FluxInserter::place(OccupancyGrid& grid, const WallClearance& walls,
       extra.push_back(r);
     }
     const std::size_t start = radius.size();
-    place_pending(extra, placing_, 50, rng_, grid, walls, position, radius, &domain, &parent);
+    place_pending(extra, placing_, kAttempts, rng_, grid, walls, position, radius, &domain, &parent,
+                  kGiveUpAfter);
     for (std::size_t k = start; k < radius.size(); ++k) {
       inserted_mass_ += mass_of(radius[k]);
       advanced_mass_ += mass_of(radius[k]);

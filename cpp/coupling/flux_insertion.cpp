@@ -23,7 +23,7 @@ std::int64_t insert_flux(Level& level, const Level& parent, std::vector<FluxInse
   // The parent's grains within a face's size (the shells' width) of the shells.
   Real reach = 0;
   for (const FluxInserter& f : inserters) reach = std::max(reach, f.face_size());
-  const OccupancyGrid material = parent.spheres_near(lo, hi, reach);
+  const CentreGrid material = parent.centres_near(lo, hi, reach);
   const WallClearance sight_walls(level.wall_set().walls(), lo, hi, reach);
   const MaterialSight sight{material, sight_walls, reach};
   std::int64_t placed = 0;

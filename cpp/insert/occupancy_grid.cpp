@@ -3,30 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "state/periodic_images.hpp"
+
 namespace grainscale {
 
 namespace {
-
-// Calls visit(p) for every periodic image p of x (x itself included): positions may sit just
-// outside the box until the next rebuild wraps them, so shifts of -L, 0, +L cover all cases.
-template <class Visit>
-void for_images(const Vec3& x, const Domain& domain, Visit visit) {
-  Vec3 images[27];
-  int n = 1;
-  images[0] = x;
-  for (int a = 0; a < 3; ++a) {
-    if (!domain.periodic[a]) continue;
-    const Real len = domain.hi[a] - domain.lo[a];
-    const int m = n;
-    for (int k = 0; k < m; ++k)
-      for (Real s : {-len, len}) {
-        Vec3 p = images[k];
-        p[a] += s;
-        images[n++] = p;
-      }
-  }
-  for (int k = 0; k < n; ++k) visit(images[k]);
-}
 
 bool touches(const Vec3& p, Real r, const Vec3& box_lo, const Vec3& box_hi) {
   return ((p.array() + r) >= box_lo.array()).all() && ((p.array() - r) <= box_hi.array()).all();
@@ -129,25 +110,6 @@ bool OccupancyGrid::covers(const Vec3& lo, const Vec3& hi, Real r) const {
           if (far.squaredNorm() < s * s) return true;
         }
   return false;
-}
-
-bool OccupancyGrid::nearest(const Vec3& x, Real reach, Vec3& centre) const {
-  const int c = cell_of(x);
-  const int cx = c % dims_[0], cy = (c / dims_[0]) % dims_[1], cz = c / (dims_[0] * dims_[1]);
-  Real best = reach * reach;
-  bool found = false;
-  for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dims_[2] - 1); ++z)
-    for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dims_[1] - 1); ++y)
-      for (int xx = std::max(cx - 1, 0); xx <= std::min(cx + 1, dims_[0] - 1); ++xx)
-        for (int k = head_[xx + dims_[0] * (y + dims_[1] * z)]; k >= 0; k = next_[k]) {
-          const Real d2 = (x_[k] - x).squaredNorm();
-          if (d2 < best) {
-            best = d2;
-            centre = x_[k];
-            found = true;
-          }
-        }
-  return found;
 }
 
 }  // namespace grainscale

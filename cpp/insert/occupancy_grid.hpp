@@ -38,9 +38,6 @@ class OccupancyGrid {
   // Whether every centre in the box [lo, hi] (edges at most the cell size) would make a sphere
   // of radius r overlap one single stored sphere: no sphere of radius >= r fits there any more.
   bool covers(const Vec3& lo, const Vec3& hi, Real r) const;
-  // The stored centre nearest to x within `reach` (at most the max_new_radius the grid was built
-  // with); false if there is none.
-  bool nearest(const Vec3& x, Real reach, Vec3& centre) const;
   std::size_t size() const { return x_.size(); }
 
  private:

@@ -4,7 +4,8 @@ namespace grainscale {
 
 void place_pending(std::vector<Real>& pending, const Region& region, int max_attempts, Rng& rng,
                    OccupancyGrid& grid, const WallClearance& walls, std::vector<Vec3>& position,
-                   std::vector<Real>& radius, const Domain* domain, const MaterialSight* sight) {
+                   std::vector<Real>& radius, const Domain* domain, const MaterialSight* sight,
+                   int give_up_after) {
   const auto in_domain = [domain](const Vec3& x) {
     if (domain == nullptr) return true;
     for (int a = 0; a < 3; ++a)
@@ -16,7 +17,6 @@ void place_pending(std::vector<Real>& pending, const Region& region, int max_att
     Vec3 from;
     return sight->material.nearest(x, sight->reach, from) && !sight->walls.separates(x, from);
   };
-  const int give_up_after = 32;
   int failures = 0;
   std::size_t k = 0;
   std::vector<Real> still_pending;

@@ -259,10 +259,11 @@ InsertionSite Level::insertion_site(const Vec3& lo, const Vec3& hi, Real max_new
                        WallClearance(walls_.walls(), lo, hi, max_new_radius)};
 }
 
-OccupancyGrid Level::spheres_near(const Vec3& lo, const Vec3& hi, Real reach) const {
+CentreGrid Level::centres_near(const Vec3& lo, const Vec3& hi, Real reach) const {
   Real r_old = 0;
   const SphereSet present = partition_.gather_nearby(lo, hi, reach, r_old, ps_, domain_, comm_);
-  return OccupancyGrid(lo, hi, reach, r_old, present, domain_);
+  // Cells one grain across: a bed's nearest centre is then found in the first rings.
+  return CentreGrid(lo, hi, reach, std::max(2 * r_old, reach / 8), present, domain_);
 }
 
 }  // namespace grainscale

@@ -27,6 +27,7 @@
 #include "contact/contact_law.hpp"
 #include "contact/contact_stats.hpp"
 #include "geometry/wall.hpp"
+#include "insert/centre_grid.hpp"
 #include "level/contact_state.hpp"
 #include "level/force_hook.hpp"
 #include "level/guards.hpp"
@@ -85,9 +86,9 @@ class Level {
   // Collective: the occupancy of every rank's particles near the box [lo, hi] for new particles
   // of radius at most max_new_radius, and the clearance of the walls where they are now.
   InsertionSite insertion_site(const Vec3& lo, const Vec3& hi, Real max_new_radius) const;
-  // Collective: every rank's particles within `reach` (m) of the box [lo, hi], in an occupancy
-  // grid whose nearest() finds them up to that distance.
-  OccupancyGrid spheres_near(const Vec3& lo, const Vec3& hi, Real reach) const;
+  // Collective: the centres of every rank's particles within `reach` (m) of the box [lo, hi], in
+  // a grid whose nearest() finds them up to that distance.
+  CentreGrid centres_near(const Vec3& lo, const Vec3& hi, Real reach) const;
   // The global id the next particle added will get.
   GlobalId next_id() const { return next_id_; }
 

@@ -82,8 +82,11 @@ from .levels import (
 )
 from .materials import Material
 from .simulation import Simulation
+from .stopwatch import Stopwatch
 from .strict_attributes import StrictAttributes
 from .timestep import rayleigh_time
+
+EXCHANGE_PARTS = ("flux", "extract", "insert", "sample", "controls", "settle", "output")
 
 __all__ = ["Exchange", "Hierarchy", "Level", "describe_balance", "in_cells"]
 
@@ -108,7 +111,8 @@ class Hierarchy(StrictAttributes):
     keeps clear of its parent's own interface (the parent's insertion shells) by a shell depth.
 
     ``wall_clock`` holds where this rank's time went (s): ``levels``, per level, stepping it,
-    and ``exchange``, the rest of the intervals (fields, controllers, insertion, books).
+    ``exchange``, the rest of the intervals (fields, controllers, insertion, books), and
+    ``exchange_parts``, the latter per part (EXCHANGE_PARTS).
     """
 
     def __init__(
@@ -157,9 +161,16 @@ class Hierarchy(StrictAttributes):
         check_nesting(self.couplings, self.parents, self.sizes, bounds)
         self._refuse_initial_shadow()
         self.intervals = 0
-        # Wall-clock (s, this rank) stepping each level and in the exchanges: where time goes.
-        self.wall_clock: dict[str, Any] = {"levels": [0.0] * len(levels), "exchange": 0.0}
-        self._cell_output: dict[str, Any] | None = None
+        # Wall-clock (s, this rank) stepping each level and in the exchanges, the latter also per
+        # part (flux metering, extraction, insertion, sampling, fields and controllers, shadow
+        # removal, output; a collective's part includes waiting for the other ranks).
+        self._watch = Stopwatch(EXCHANGE_PARTS)
+        self.wall_clock: dict[str, Any] = {
+            "levels": [0.0] * len(levels),
+            "exchange": 0.0,
+            "exchange_parts": self._watch.seconds,
+        }
+        self._cell_output: Any = None  # io.cells.ExchangeCellSeries once output() is called
         self.initial_mass = sum(self._held())
         self._freeze_attributes()
 
@@ -430,22 +441,26 @@ class Hierarchy(StrictAttributes):
 
     def _interval(self) -> None:
         start, stepped = time.perf_counter(), sum(self.wall_clock["levels"])
+        part = self._watch.part
         for sim in self.sims:  # before the exchange touches any level's particles
             sim.engine.check_unseen_writes()
         for k, sim in enumerate(self.sims):
             level = sim.engine.core
             children = [c for c in self.couplings if c.parent == k]
             level.clear_lost_log()
-            for c in children:
-                c.interface.start_flux(level, float(np.max(c.grid["edge"])))
+            with part("flux"):
+                for c in children:
+                    c.interface.start_flux(level, float(np.max(c.grid["edge"])))
             # What the parent carried across the faces this interval is paid now.
             for c in self.couplings:
                 if c.child == k and c.flux is not None:
-                    c.interface.book(c.flux, c.beyond)
-                    c.flux = None
-                    c.interface.extract(level)
-                    c.interface.allow_advance(c.advance.budget)
-                    c.interface.insert(level, self.sims[c.parent].engine.core)
+                    with part("extract"):
+                        c.interface.book(c.flux, c.beyond)
+                        c.flux = None
+                        c.interface.extract(level)
+                        c.interface.allow_advance(c.advance.budget)
+                    with part("insert"):
+                        c.interface.insert(level, self.sims[c.parent].engine.core)
             touching = [c for c in self.couplings if c.parent == k or c.child == k]
             samples = min(self.exchange.samples, self.steps[k])
             done = 0
@@ -455,24 +470,32 @@ class Hierarchy(StrictAttributes):
                 sim.run(steps=n, progress=False)
                 self.wall_clock["levels"][k] += time.perf_counter() - t0
                 done += n
-                for c in touching:
-                    c.interface.sample(level, c.child == k)
-                    if c.child == k and c.stress is not None and c.stress.active:
-                        c.stress.sample(level, c.child_coupling)
-            for c in children:
-                c.book_parent_interval(c.interface.finish_flux(level))
+                with part("sample"):
+                    for c in touching:
+                        c.interface.sample(level, c.child == k)
+                        if c.child == k and c.stress is not None and c.stress.active:
+                            c.stress.sample(level, c.child_coupling)
+            with part("flux"):
+                for c in children:
+                    c.book_parent_interval(c.interface.finish_flux(level))
+                for c in self.couplings:
+                    if c.child == k:
+                        c.credit_leavers(level)
+        with part("controls"):
             for c in self.couplings:
-                if c.child == k:
-                    c.credit_leavers(level)
-        for c in self.couplings:
-            c.parent_fields = c.interface.finish_average(self.sims[c.parent].engine.core, False)
-            c.child_fields = c.interface.finish_average(self.sims[c.child].engine.core, True)
-            c.update_controls(self.every)
-            c.apply_controls(self.sims[c.parent].engine.core, self.sims[c.child].engine.core)
-        for c in sorted(self.couplings, key=lambda c: -c.child):  # finest first: debts go up
-            self._settle(c)
+                c.parent_fields = c.interface.finish_average(self.sims[c.parent].engine.core, False)
+                c.child_fields = c.interface.finish_average(self.sims[c.child].engine.core, True)
+                c.update_controls(self.every)
+                c.apply_controls(self.sims[c.parent].engine.core, self.sims[c.child].engine.core)
+        with part("settle"):
+            for c in sorted(self.couplings, key=lambda c: -c.child):  # finest first: debts go up
+                self._settle(c)
         self.intervals += 1
-        self._write_cells()
+        with part("output"):
+            if self._cell_output is not None:
+                rank = self.sims[0].rank
+                self._cell_output.write(self.time, self.intervals, self.couplings, rank,
+                                        1e-9 * self.every)  # fmt: skip
         stepping = sum(self.wall_clock["levels"]) - stepped
         self.wall_clock["exchange"] += time.perf_counter() - start - stepping
 
@@ -511,34 +534,14 @@ class Hierarchy(StrictAttributes):
         interval written as ``<directory>/cells<k>_<interval>.vtp`` (points at the cell centres)."""
         from pathlib import Path
 
-        from .io import VTK, PVDSeries
+        from .io import VTK
+        from .io.cells import ExchangeCellSeries
 
         positive("Hierarchy.output", "every", every, " (s)")
         for k, sim in enumerate(self.sims):
             sim.output(VTK(directory, every=every, prefix=f"level{k}", level=k))
-        path = Path(directory)
-        self._cell_output = {
-            "directory": path,
-            "every": float(every),
-            "next": self.time,
-            "series": [PVDSeries(path / f"cells{k}.pvd") for k in range(len(self.couplings))],
-        }
-
-    def _write_cells(self) -> None:
-        from .io.cells import write_exchange_cells
-
-        out = self._cell_output
-        if out is None or self.time < out["next"] - 1e-9 * self.every:
-            return
-        out["next"] += out["every"] * max(1, math.ceil((self.time - out["next"]) / out["every"]))
-        if self.sims[0].rank != 0:
-            return
-        out["directory"].mkdir(parents=True, exist_ok=True)
-        for k, c in enumerate(self.couplings):
-            assert c.parent_fields is not None and c.child_fields is not None
-            name = f"cells{k}_{self.intervals:08d}.vtp"
-            write_exchange_cells(out["directory"] / name, c.grid, c.parent_fields, c.child_fields)
-            out["series"][k].add(self.time, name)
+        self._cell_output = ExchangeCellSeries(Path(directory), float(every), self.time,
+                                               len(self.couplings))  # fmt: skip
 
     # ------------------------------------------------------------------ checkpoints
     def checkpoint(self, path: str | os.PathLike[str]) -> None:

@@ -148,7 +148,11 @@ class HierarchyRun:
         t0 = time.perf_counter()
         self.h.run(until=until)
         self.phases[name] = self.phases.get(name, 0.0) + time.perf_counter() - t0
-        self.say(f"  {name} to t = {self.h.time:.3f} s: {time.perf_counter() - t0:.0f} s")
+        parts = ", ".join(f"{k} {v:.0f}" for k, v in self.h.wall_clock["exchange_parts"].items())
+        self.say(
+            f"  {name} to t = {self.h.time:.3f} s: {time.perf_counter() - t0:.0f} s "
+            f"(exchange parts so far, s: {parts})"
+        )
 
     def _sample(self) -> None:
         h, case = self.h, self.case
@@ -189,7 +193,8 @@ class HierarchyRun:
             self.say(
                 f"  t = {t:.2f} s after opening: {m * 1e3:.1f} g out, held per level (g) "
                 + ", ".join(f"{x * 1e3:.0f}" for x in self.inventory[-1][1])
-                + f", {time.perf_counter() - t0:.0f} s so far"
+                + f", {time.perf_counter() - t0:.0f} s so far, exchanges "
+                + f"{h.wall_clock['exchange']:.0f} s"
             )
         wall = time.perf_counter() - t0
         self.restart["check"] = self._restart_check(checkpoint)
@@ -285,6 +290,7 @@ class HierarchyRun:
             "phases_s": self.phases,
             "level_wall_clock_s": list(h.wall_clock["levels"]),
             "exchange_wall_clock_s": float(h.wall_clock["exchange"]),
+            "exchange_parts_s": dict(h.wall_clock["exchange_parts"]),
             "ranks": h.sims[0].ranks,
             "peak_memory_bytes": peak_memory(self.comm),
             "restart": {k: v for k, v in self.restart.items() if k != "balance"},

@@ -5,7 +5,7 @@
 //                            grain size (simple cubic, solid fraction 0.52), to a random packing:
 //                            no overlaps, every centre over the face rectangle and inside the
 //                            shell's depth, grains straddling the rectangle's edges, and a solid
-//                            fraction of the shell (face area x depth) of at least 0.35 (0.43
+//                            fraction of the shell (face area x depth) of at least 0.35 (0.41
 //                            measured; whole grains inside the rectangle gave 0.28);
 //   books_stay_exact        – fed = inserted + pending after placement, what waits is booked;
 //   stays_in_the_domain     – where the face's band reaches past a closed side of the domain (the
@@ -88,7 +88,7 @@ Placed place_all(gs::FluxInserter& ins, const gs::SphereSet* parent = nullptr,
   gs::OccupancyGrid grid(lo, hi, kRadius, 0.0, gs::SphereSet{}, kOpen);
   const gs::SphereSet bed = parent != nullptr ? *parent : parent_bed(lo, hi);
   const Real reach = ins.face_size();
-  const gs::OccupancyGrid material(lo, hi, reach, 2 * kRadius, bed, kOpen);
+  const gs::CentreGrid material(lo, hi, reach, 4 * kRadius, bed, kOpen);
   const gs::WallClearance clearance(walls, lo, hi, kRadius), sight_walls(walls, lo, hi, reach);
   const gs::MaterialSight sight{material, sight_walls, reach};
   Placed p;

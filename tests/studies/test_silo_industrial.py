@@ -72,6 +72,12 @@ def test_books_levels_and_timing(study):
     assert dts[0] > dts[1] > dts[2]  # each level its own time step
     stepping = sum(mlcg["level_wall_clock_s"]) + mlcg["exchange_wall_clock_s"]
     assert stepping <= mlcg["wall_clock_s"]
+    # The exchanges' parts are timed within them; a fed hierarchy inserts and samples.
+    parts = mlcg["exchange_parts_s"]
+    assert set(parts) == {"flux", "extract", "insert", "sample", "controls", "settle", "output"}
+    assert all(t >= 0 for t in parts.values())
+    assert sum(parts.values()) <= mlcg["exchange_wall_clock_s"] + 1e-6
+    assert parts["insert"] > 0 and parts["sample"] > 0
     assert set(mlcg["phases_s"]) >= {"fill", "settle", "discharge", "checkpoint"}
     assert math.isfinite(results["throughput_particle_steps_per_s"])
 

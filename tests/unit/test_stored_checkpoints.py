@@ -12,7 +12,8 @@ them only for a deliberate change of the physics, with
 or, to keep the old checkpoint and renew only the state its run reaches,
 ``--write-after``. ``hierarchy_after.npz`` was renewed so (issue 28) when the flux insertion
 began to place fine grains only where the coarse material reaches (no wall between them): the
-stored run's fine level placed some grains where that rule now refuses them.
+stored run's fine level placed some grains where that rule now refuses them; and again when a
+face began to give up for the interval once four grains in a row find no room (not 32).
 """
 
 from __future__ import annotations

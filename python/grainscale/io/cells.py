@@ -3,12 +3,14 @@ cell at its centre, with the boundary flag and both levels' cell averages."""
 
 from __future__ import annotations
 
+import math
 import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .vtk import write_vtp
+from .vtk import PVDSeries, write_vtp
 
 
 def write_exchange_cells(
@@ -31,3 +33,29 @@ def write_exchange_cells(
         data[f"{name}_velocity"] = fields["velocity"][cells]
         data[f"{name}_stress"] = fields["stress"][cells].reshape(-1, 9)
     write_vtp(path, centres, data)
+
+
+class ExchangeCellSeries:
+    """Every interface's exchange cells written every ``every`` s of simulated time from
+    ``start`` on: ``<directory>/cells<k>_<interval>.vtp``, listed in ``cells<k>.pvd``."""
+
+    def __init__(self, directory: Path, every: float, start: float, interfaces: int) -> None:
+        self.directory, self.every, self.next = directory, every, start
+        self.series = [PVDSeries(directory / f"cells{k}.pvd") for k in range(interfaces)]
+
+    def write(
+        self, time: float, interval: int, couplings: list[Any], rank: int, tol: float
+    ) -> None:
+        """Writes the couplings' last fields if ``time`` (s) has reached the next output time
+        (within ``tol`` s); only rank 0 writes."""
+        if time < self.next - tol:
+            return
+        self.next += self.every * max(1, math.ceil((time - self.next) / self.every))
+        if rank != 0:
+            return
+        self.directory.mkdir(parents=True, exist_ok=True)
+        for k, c in enumerate(couplings):
+            assert c.parent_fields is not None and c.child_fields is not None
+            name = f"cells{k}_{interval:08d}.vtp"
+            write_exchange_cells(self.directory / name, c.grid, c.parent_fields, c.child_fields)
+            self.series[k].add(time, name)
