@@ -24,7 +24,7 @@ namespace grainscale {
 // segment to the nearest one. So no grain is placed where no grain of that material can be:
 // under a floor, behind a wall, which the clearance test alone cannot tell from the bed's side.
 struct MaterialSight {
-  const CentreGrid& material;  // built with a reach >= reach
+  const CentreGrid& material;  // built for a reach of at least `reach`
   const WallClearance& walls;  // complete for segments up to `reach` long
   Real reach = 0;              // m
 };

@@ -236,9 +236,8 @@ def reference_lines(result: DemoResult) -> list[str]:
             )
         if "mlcg" in e:
             m = e["mlcg"]
-            source = f"commit {m['made']['commit']}" if "made" in m else "studies/mlcg_jam"
             lines.append(
-                f"- one seed of MLCG scatters: over seeds {m['seeds']} ({source}) MLCG "
+                f"- one seed of MLCG scatters: over seeds {m['seeds']} (studies/mlcg_jam) MLCG "
                 f"2 -> 1 ran {_pct(min(m['rates']) / shipped.rate - 1)} to "
                 f"{_pct(max(m['rates']) / shipped.rate - 1)}, mean {_pct(m['rate_ratio'] - 1)}"
             )
