@@ -3,17 +3,21 @@
 // GhostExchange. Torque arm: contact radius r - overlap/2 (as LIGGGHTS).
 //
 // Three passes over batches of up to kBatch touching contacts (core/simd_pack.hpp):
-//   1. scan the list in order: the overlap test per entry, without branches in a bed (a
-//      contact that closes forgets its history), and for each touching contact its inputs
-//      gathered into the batch, one array per quantity (the accesses to particle j happen here);
+//   1. scan the list in order, in chunks of entries that cannot overflow the batch and without
+//      a loop per row (rows hold two or three entries: the exit of a loop per row mispredicts
+//      at nearly every row): the overlap test per entry, without branches in a bed (a contact
+//      that closes forgets its history), then each touching contact's inputs gathered into the
+//      batch, one array per quantity (the accesses to particle j happen here);
 //   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
 //      square roots of kPackLanes contacts in one instruction each;
 //   3. replay the batch in list order, adding each contact's force and torques to i and j in
-//      exactly the sequence of a one-contact-at-a-time loop.
+//      exactly the sequence of a one-contact-at-a-time loop; a row's sum goes to its particle
+//      where the next row starts, without a branch.
 // Pass 2 gives the scalar law's bits and pass 3 the scalar loop's summation order, so the
-// forces are the same bits for every lane width. Where few entries touch, batching costs more
-// than it saves: accumulate_pair_forces (at the end) then takes one contact at a time
-// (pair_loop_one_by_one.hpp), as it always does with GRAINSCALE_SIMD=OFF.
+// forces are the same bits for every lane width (tests/cpp/test_contact_lanes.cpp). Where few
+// entries touch, batching costs more than it saves: accumulate_pair_forces (at the end) then
+// takes one contact at a time (pair_loop_one_by_one.hpp), as it always does with
+// GRAINSCALE_SIMD=OFF.
 #pragma once
 
 #include <algorithm>
@@ -60,24 +64,6 @@ struct PairBatch {
   }
 };
 
-template <class T>
-[[gnu::always_inline]] inline T load_lanes(const Real* p) {
-  if constexpr (std::is_same_v<T, Real>) {
-    return *p;
-  } else {
-    T v;
-    __builtin_memcpy(&v, p, sizeof(T));
-    return v;
-  }
-}
-template <class T>
-[[gnu::always_inline]] inline void store_lanes(Real* p, T v) {
-  if constexpr (std::is_same_v<T, Real>)
-    *p = v;
-  else
-    __builtin_memcpy(p, &v, sizeof(T));
-}
-
 // Pass 2 on lanes [b, b + kPackLanes) of the batch.
 template <class Law, bool kUpdate, class Batch>
 [[gnu::always_inline]] inline void evaluate_pack(const Law& law, Batch& batch, int b, int valid,
@@ -119,10 +105,11 @@ template <class Law, bool kUpdate, class Batch>
   // The history of each lane, as one value per lane and history slot.
   alignas(64) Real columns[S][W];
   const typename Law::Pair* pairs[W];
+  std::size_t at[W];  // where each lane's history starts
   for (int l = 0; l < W; ++l) {
     pairs[l] = &law.pair_at(batch.pair[b + l]);
-    const Real* hl = history + static_cast<std::size_t>(batch.entry[b + l]) * S;
-    for (int s = 0; s < S; ++s) columns[s][l] = hl[s];
+    at[l] = static_cast<std::size_t>(batch.entry[b + l]) * S;
+    for (int s = 0; s < S; ++s) columns[s][l] = history[at[l] + s];
   }
   T h[S];
   for (int s = 0; s < S; ++s) h[s] = load_lanes<T>(columns[s]);
@@ -133,8 +120,7 @@ template <class Law, bool kUpdate, class Batch>
     out = law.force_lanes(Param<typename Law::Pair, T>::of(pairs), c, h);
   if constexpr (kUpdate)
     for (int l = 0; l < valid; ++l) {
-      Real* hl = history + static_cast<std::size_t>(batch.entry[b + l]) * S;
-      for (int s = 0; s < S; ++s) hl[s] = lane(h[s], l);
+      for (int s = 0; s < S; ++s) history[at[l] + s] = lane(h[s], l);
     }
   const LaneVec<T>& F = out.force;
   const LaneVec<T> nxf = cross(nrm, F);
@@ -171,6 +157,7 @@ template <class Law, bool kUpdate, bool kStats>
   constexpr int S = Law::kHistorySize;
   constexpr int W = kPackLanes;
   using Batch = detail::PairBatch<Law::kRolling ? 4 : 0>;
+  constexpr int kMinChunk = 16;  // fewer free slots: the batch is evaluated first
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
   const Vec3* v = ps.velocity.data();
@@ -185,22 +172,17 @@ template <class Law, bool kUpdate, bool kStats>
   Real* hist = list.history.data();
   Batch batch;
 
-  // Pass 3 state: the row being summed (its force and torque so far) and the next row whose
-  // end has not been applied. A row with entries ends with f[i] += fi, as in a scalar loop.
-  Index open = -1, next_row = 0;
+  // Pass 3 state: the row being summed, its force and torque so far, and where they go when
+  // the row ends (f[i] += fi, as in a scalar loop). Rows change every two or three contacts,
+  // unpredictably: the sum is passed on without a branch, to the row's particle when the next
+  // row starts and to a scratch slot while the row goes on. Rows without touching contacts are
+  // skipped: the scalar loop adds a zero sum to them, which changes no force (forces are never
+  // -0: they start at m g, Level::set_gravity, and sums and differences of values that are not
+  // -0 are not -0).
+  Index open = -1;
   Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-  auto close_rows_before = [&](Index row) {
-    for (; next_row < row; ++next_row) {
-      if (list.first[next_row] == list.first[next_row + 1]) continue;
-      if (next_row == open) {
-        f[open] += fi;
-        t[open] += ti;
-      } else {
-        f[next_row] += Vec3::Zero();  // a row without touching contacts (-0 becomes +0)
-        t[next_row] += Vec3::Zero();
-      }
-    }
-  };
+  Vec3 scratch_f = Vec3::Zero(), scratch_t = Vec3::Zero();
+  Vec3 *row_f = &scratch_f, *row_t = &scratch_t;
   auto flush = [&]() {
     const int count = batch.count;
     if (count == 0) return;
@@ -210,12 +192,17 @@ template <class Law, bool kUpdate, bool kStats>
       detail::evaluate_pack<Law, kUpdate>(law, batch, b, std::min(W, count - b), hist, dt);
     for (int q = 0; q < count; ++q) {
       const Index i = batch.i[q], j = batch.j[q];
-      if (i != open) {
-        close_rows_before(i);
-        open = i;
-        fi.setZero();
-        ti.setZero();
-      }
+      const bool new_row = i != open;
+      Vec3* to_f = new_row ? row_f : &scratch_f;
+      Vec3* to_t = new_row ? row_t : &scratch_t;
+      *to_f += fi;
+      *to_t += ti;
+      const Real keep = new_row ? 0.0 : 1.0;  // a new row starts from zero, as fi.setZero()
+      fi = keep ? fi : Vec3::Zero();
+      ti = keep ? ti : Vec3::Zero();
+      open = i;
+      row_f = f + i;
+      row_t = t + i;
       const Vec3 F(batch.fx[q], batch.fy[q], batch.fz[q]);
       const Vec3 tq_i(batch.tix[q], batch.tiy[q], batch.tiz[q]);
       const Vec3 tq_j(batch.tjx[q], batch.tjy[q], batch.tjz[q]);
@@ -243,76 +230,84 @@ template <class Law, bool kUpdate, bool kStats>
 
   std::uint8_t* touching = list.touching.data();
   const bool one_material = law.single_material();
+  const Index* first = list.first.data();
+  const Index total = first[n];
+  // Pass 1 runs over the list in chunks that cannot overflow the batch, one entry at a time
+  // without a loop per row: rows hold two or three entries, and a loop per row would
+  // mispredict its exit at nearly every row. owner[k - k0] is the row of entry k.
+  Index owner[Batch::kCapacity];
+  Index row = 0;  // the row of entry k0
   std::size_t touching_total = 0;
-  for (Index i = 0; i < n; ++i) {
-    const Index b = list.first[i], e = list.first[i + 1];
-    if (b == e) continue;
-    const Vec3 xi = x[i];
-    const Real ri = r[i];
-    // The row in pieces that fit the batch (a row is longer only around a much larger sphere).
-    for (Index k0 = b; k0 < e; k0 += Batch::kCapacity) {
-      const Index k1 = std::min<Index>(e, k0 + Batch::kCapacity);
-      if (batch.count + (k1 - k0) > Batch::kCapacity) flush();
-      // The overlap test without a branch per entry (touching or not is unpredictable in a
-      // bed): every entry is written to the next free slot, which only a touching one keeps.
-      int q = batch.count;
-      for (Index k = k0; k < k1; ++k) {
-        const Index j = partner[k];
-        const Vec3 d = xi - x[j];
-        const Real rj = r[j];
-        const Real rsum = ri + rj;
-        const bool touch = d.squaredNorm() < rsum * rsum;
-        batch.j[q] = j;
-        batch.rj[q] = rj;
-        batch.entry[q] = k;
-        batch.dx[q] = d[0];
-        batch.dy[q] = d[1];
-        batch.dz[q] = d[2];
-        batch.rsum[q] = rsum;
-        // A contact that opens or closes (rare, hence predictable): a closed one forgets its
-        // history, as a new contact starts from zero.
-        if (kUpdate && touching[k] != touch) {
-          if (!touch)
-            std::fill(hist + static_cast<std::size_t>(k) * S,
-                      hist + static_cast<std::size_t>(k + 1) * S, Real(0));
-          touching[k] = touch;
-        }
-        q += touch;
+  for (Index k0 = 0; k0 < total;) {
+    if (Batch::kCapacity - batch.count < kMinChunk) flush();
+    const Index k1 = std::min<Index>(total, k0 + (Batch::kCapacity - batch.count));
+    while (first[row + 1] <= k0) ++row;
+    // The row of each entry: the last row starting at or before it (rows without entries
+    // start where the next one does and are overwritten by it), by a running maximum.
+    std::fill(owner, owner + (k1 - k0), Index(-1));
+    Index last = row;
+    for (; last < n && first[last] < k1; ++last)
+      owner[std::max<Index>(first[last], k0) - k0] = last;
+    for (Index k = k0 + 1; k < k1; ++k) owner[k - k0] = std::max(owner[k - k0], owner[k - k0 - 1]);
+    // The overlap test without a branch per entry (touching or not is unpredictable in a
+    // bed): every entry is written to the next free slot, which only a touching one keeps.
+    int q = batch.count;
+    for (Index k = k0; k < k1; ++k) {
+      const Index i = owner[k - k0];
+      const Index j = partner[k];
+      const Vec3 d = x[i] - x[j];
+      const Real ri = r[i], rj = r[j];
+      const Real rsum = ri + rj;
+      const bool touch = d.squaredNorm() < rsum * rsum;
+      batch.i[q] = i;
+      batch.j[q] = j;
+      batch.ri[q] = ri;
+      batch.rj[q] = rj;
+      batch.entry[q] = k;
+      batch.dx[q] = d[0];
+      batch.dy[q] = d[1];
+      batch.dz[q] = d[2];
+      batch.rsum[q] = rsum;
+      // A contact that opens or closes (rare, hence predictable): a closed one forgets its
+      // history, as a new contact starts from zero.
+      if (kUpdate && touching[k] != touch) {
+        if (!touch)
+          std::fill(hist + static_cast<std::size_t>(k) * S,
+                    hist + static_cast<std::size_t>(k + 1) * S, Real(0));
+        touching[k] = touch;
       }
-      touching_total += q - batch.count;
-      // The rest of each touching contact's inputs.
-      const Vec3 vi = v[i], wi = w[i];
-      const Real imi = im[i];
-      const int mi = mat[i];
-      for (int c = batch.count; c < q; ++c) {
-        const Index j = batch.j[c];
-        batch.i[c] = i;
-        batch.pair[c] = one_material ? 0 : law.pair_index(mi, mat[j]);
-        batch.ri[c] = ri;
-        const Vec3 dv = vi - v[j];
-        batch.dvx[c] = dv[0];
-        batch.dvy[c] = dv[1];
-        batch.dvz[c] = dv[2];
-        batch.wix[c] = wi[0];
-        batch.wiy[c] = wi[1];
-        batch.wiz[c] = wi[2];
-        batch.wjx[c] = w[j][0];
-        batch.wjy[c] = w[j][1];
-        batch.wjz[c] = w[j][2];
-        batch.inv_mass_sum[c] = imi + im[j];
-        if constexpr (Law::kRolling) {
-          const Vec3 w_rel = wi - w[j];
-          batch.rolling[0][c] = w_rel[0];
-          batch.rolling[1][c] = w_rel[1];
-          batch.rolling[2][c] = w_rel[2];
-          batch.rolling[3][c] = irl[i] + irl[j];
-        }
-      }
-      batch.count = q;
+      q += touch;
     }
+    touching_total += q - batch.count;
+    // The rest of each touching contact's inputs.
+    for (int c = batch.count; c < q; ++c) {
+      const Index i = batch.i[c], j = batch.j[c];
+      batch.pair[c] = one_material ? 0 : law.pair_index(mat[i], mat[j]);
+      const Vec3 dv = v[i] - v[j];
+      batch.dvx[c] = dv[0];
+      batch.dvy[c] = dv[1];
+      batch.dvz[c] = dv[2];
+      batch.wix[c] = w[i][0];
+      batch.wiy[c] = w[i][1];
+      batch.wiz[c] = w[i][2];
+      batch.wjx[c] = w[j][0];
+      batch.wjy[c] = w[j][1];
+      batch.wjz[c] = w[j][2];
+      batch.inv_mass_sum[c] = im[i] + im[j];
+      if constexpr (Law::kRolling) {
+        const Vec3 w_rel = w[i] - w[j];
+        batch.rolling[0][c] = w_rel[0];
+        batch.rolling[1][c] = w_rel[1];
+        batch.rolling[2][c] = w_rel[2];
+        batch.rolling[3][c] = irl[i] + irl[j];
+      }
+    }
+    batch.count = q;
+    k0 = k1;
   }
   flush();
-  close_rows_before(n);
+  *row_f += fi;
+  *row_t += ti;
   if (kUpdate && !list.partner.empty())
     list.touching_share = static_cast<double>(touching_total) / list.partner.size();
 }

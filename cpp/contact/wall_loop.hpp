@@ -1,6 +1,9 @@
 // The particle-wall force loop: the same contact law as particle pairs, with the wall as body j
 // (R_j, m_j infinite; its own material or the rigid pseudo-material). Accumulates the force and
-// torque (about the wall's origin) that the particles exert on each wall.
+// torque (about the wall's origin) that the particles exert on each wall. Contacts with analytic
+// walls are gathered in a batch and the law evaluated on packs of them, then applied in order
+// (detail::WallBatch); mesh contacts are resolved and evaluated one at a time, after the batch
+// so far, so every sum is the one-contact-at-a-time loop's, bit for bit.
 //
 // Mesh walls: a sphere near a shared edge or vertex is close to several triangles, but touches
 // the surface once. Per particle and mesh the touching triangles are resolved as follows:
@@ -141,6 +144,66 @@ inline void prefetch_wall_row(const ParticleStore& ps, const ContactList& list, 
   __builtin_prefetch(list.history.data() + static_cast<std::size_t>(k) * S, 1);
 }
 
+// Touching contacts with analytic walls (planes, cylinders, ...), gathered so that the law runs
+// on packs of kPackLanes contacts (core/simd_pack.hpp) and then replayed in order: the forces
+// and the sums on particles and walls are the bits of a one-contact-at-a-time loop. A mesh
+// contact is evaluated alone after the batch is emptied, so the order stays the same.
+template <class Law>
+struct WallBatch {
+  static constexpr int kCapacity = 64;  // a multiple of every lane width
+  static constexpr int S = Law::kHistorySize;
+  using Column = Real[kCapacity];
+  alignas(64) Column nx, ny, nz, overlap, r_eff, m_eff, vx, vy, vz, wx, wy, wz, rolling_inertia;
+  alignas(64) Column fx, fy, fz, mx, my, mz;  // results: force and rolling torque on i
+  alignas(64) Real history[S > 0 ? S : 1][kCapacity];
+  const typename Law::Pair* pair[kCapacity];
+  Index i[kCapacity], entry[kCapacity];
+  int wall[kCapacity];
+  Vec3 lever[kCapacity];  // contact point - wall origin
+  Real arm[kCapacity];    // r_i - overlap / 2
+  int count = 0;
+
+  void pad(int end) {
+    for (Real* column :
+         {nx, ny, nz, overlap, r_eff, m_eff, vx, vy, vz, wx, wy, wz, rolling_inertia})
+      std::fill(column + count, column + end, column[count - 1]);
+    for (int s = 0; s < S; ++s)
+      std::fill(history[s] + count, history[s] + end, history[s][count - 1]);
+    std::fill(pair + count, pair + end, pair[count - 1]);
+  }
+};
+
+// The law on lanes [b, b + kPackLanes) of a wall batch; the histories are updated in the batch.
+template <class Law, class Batch>
+[[gnu::always_inline]] inline void evaluate_wall_pack(const Law& law, Batch& batch, int b,
+                                                      Real dt) {
+  using T = LaneReal;
+  constexpr int S = Law::kHistorySize;
+  auto in = [&](const Real* column) { return load_lanes<T>(column + b); };
+  const ContactLanes<T> c{{in(batch.nx), in(batch.ny), in(batch.nz)},
+                          in(batch.overlap),
+                          in(batch.r_eff),
+                          in(batch.m_eff),
+                          {in(batch.vx), in(batch.vy), in(batch.vz)},
+                          dt,
+                          {in(batch.wx), in(batch.wy), in(batch.wz)},
+                          in(batch.rolling_inertia)};
+  T h[S > 0 ? S : 1];
+  for (int s = 0; s < S; ++s) h[s] = in(batch.history[s]);
+  ContactLanesOutput<T> out;
+  if constexpr (std::is_same_v<T, Real>)
+    out = law.force_lanes(Param<typename Law::Pair, Real>(*batch.pair[b]), c, h);
+  else
+    out = law.force_lanes(Param<typename Law::Pair, T>::of(batch.pair + b), c, h);
+  for (int s = 0; s < S; ++s) store_lanes(batch.history[s] + b, h[s]);
+  store_lanes(batch.fx + b, out.force.x);
+  store_lanes(batch.fy + b, out.force.y);
+  store_lanes(batch.fz + b, out.force.z);
+  store_lanes(batch.mx + b, out.rolling_torque.x);
+  store_lanes(batch.my + b, out.rolling_torque.y);
+  store_lanes(batch.mz + b, out.rolling_torque.z);
+}
+
 }  // namespace detail
 
 template <class Law, bool kUpdate, bool kStats>
@@ -148,6 +211,47 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
                             const WallPrimitives& prims, ContactList& list, Real dt,
                             ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
+  constexpr int W = kPackLanes;
+  using Batch = detail::WallBatch<Law>;
+  Batch batch;
+  // Evaluates the batch in packs and applies its contacts in the order they were found.
+  auto flush = [&]() {
+    const int count = batch.count;
+    if (count == 0) return;
+    const int end = (count + W - 1) / W * W;
+    if (end > count) batch.pad(end);
+    for (int b = 0; b < end; b += W) detail::evaluate_wall_pack(law, batch, b, dt);
+    for (int q = 0; q < count; ++q) {
+      const Index i = batch.i[q];
+      const int w = batch.wall[q];
+      Wall& wall = walls[w];
+      if constexpr (kUpdate) {
+        const Index k = batch.entry[q];
+        for (int s = 0; s < S; ++s)
+          list.history[static_cast<std::size_t>(k) * S + s] = batch.history[s][q];
+        list.touching[k] = 1;
+      }
+      const Vec3 F(batch.fx[q], batch.fy[q], batch.fz[q]);
+      const Vec3 nrm(batch.nx[q], batch.ny[q], batch.nz[q]);
+      ps.force[i] += F;
+      ps.torque[i] -= batch.arm[q] * nrm.cross(F);
+      wall.force -= F;
+      wall.torque -= batch.lever[q].cross(F);
+      if constexpr (Law::kRolling) {
+        const Vec3 M(batch.mx[q], batch.my[q], batch.mz[q]);
+        ps.torque[i] += M;
+        wall.torque -= M;
+      }
+      if constexpr (kStats) {
+        const Real overlap = batch.overlap[q];
+        ++stats.contacts;
+        stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / batch.r_eff[q]);
+        if (stats.record)
+          stats.records.push_back({ps.id[i], -1 - GlobalId(w), overlap, nrm, F, i, -1});
+      }
+    }
+    batch.count = 0;
+  };
   std::vector<detail::MeshTouch> touches;
   std::vector<char> counted;
   // The particles with wall entries are a thin, scattered subset (those near a wall), listed at
@@ -205,6 +309,43 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
           stats.records.push_back({ps.id[i], -1 - GlobalId(w), overlap, nrm, F, i, -1});
       }
     };
+    // One touching contact with an analytic wall: into the batch (entry k, geometry g).
+    auto push = [&](const Wall& wall, int w, Index k, const WallContact& g) {
+      if (batch.count == Batch::kCapacity) flush();
+      const int q = batch.count++;
+      const Real overlap = ri - g.distance;
+      const Vec3& nrm = g.normal;
+      const Real ai = ri - 0.5 * overlap;
+      const Vec3 vrel =
+          ps.velocity[i] - ai * ps.angular_velocity[i].cross(nrm) - wall.surface_velocity(g.point);
+      Vec3 w_rel = Vec3::Zero();
+      Real rolling_inertia = 0;
+      if constexpr (Law::kRolling) {
+        w_rel = ps.angular_velocity[i] - wall.angular_velocity;
+        rolling_inertia = 1 / ps.inv_rolling_inertia[i];
+      }
+      batch.nx[q] = nrm[0];
+      batch.ny[q] = nrm[1];
+      batch.nz[q] = nrm[2];
+      batch.overlap[q] = overlap;
+      batch.r_eff[q] = ri;
+      batch.m_eff[q] = ps.mass[i];
+      batch.vx[q] = vrel[0];
+      batch.vy[q] = vrel[1];
+      batch.vz[q] = vrel[2];
+      batch.wx[q] = w_rel[0];
+      batch.wy[q] = w_rel[1];
+      batch.wz[q] = w_rel[2];
+      batch.rolling_inertia[q] = rolling_inertia;
+      const Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
+      for (int s = 0; s < S; ++s) batch.history[s][q] = h[s];
+      batch.pair[q] = &law.pair(ps.material[i], wall.law_material);
+      batch.i[q] = i;
+      batch.entry[q] = k;
+      batch.wall[q] = w;
+      batch.lever[q] = g.point - wall.origin;
+      batch.arm[q] = ai;
+    };
     auto release = [&](Index k) {
       if (kUpdate && list.touching[k]) {
         Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
@@ -220,13 +361,14 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       if (wall.shape != WallShape::Mesh) {
         WallContact g;
         if (wall.closest(xi, g) && g.distance < ri)
-          apply(wall, w, k, list.history.data() + static_cast<std::size_t>(k) * S, g);
+          push(wall, w, k, g);
         else
           release(k);
         ++k;
         continue;
       }
-      // All entries of this mesh for particle i.
+      // All entries of this mesh for particle i, evaluated one at a time after the batch.
+      flush();
       Index end = k;
       while (end < e && prims.wall[list.partner[end]] == w) ++end;
       const TriangleMesh& mesh = *wall.mesh;
@@ -264,6 +406,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       k = end;
     }
   }
+  flush();
 }
 
 }  // namespace grainscale

@@ -126,6 +126,25 @@ using LaneReal = std::conditional_t<kPackLanes == 1, Real, Pack>;
 using LaneReal = Real;
 #endif
 
+// kPackLanes consecutive values from memory as lanes (any alignment), and back.
+template <class T>
+[[gnu::always_inline]] inline T load_lanes(const Real* p) {
+  if constexpr (std::is_same_v<T, Real>) {
+    return *p;
+  } else {
+    T v;
+    __builtin_memcpy(&v, p, sizeof(T));
+    return v;
+  }
+}
+template <class T>
+[[gnu::always_inline]] inline void store_lanes(Real* p, T v) {
+  if constexpr (std::is_same_v<T, Real>)
+    *p = v;
+  else
+    __builtin_memcpy(p, &v, sizeof(T));
+}
+
 // A 3-vector of lanes with the operations the laws use, each in the order Eigen evaluates it
 // for a Vec3 (dot products left to right), so that the scalar form matches Eigen's results.
 template <class T>

@@ -100,7 +100,9 @@ void Level::set_contact_law(const ContactLaw& law) {
 
 void Level::set_gravity(const Vec3& g) {
   if (!g.allFinite()) throw_invalid("Simulation.gravity", "finite (m/s^2)", g.transpose());
-  gravity_ = g;
+  // + 0 turns a -0 component into +0: the forces start at m g, and the pair loop relies on
+  // them never being -0 (pair_loop.hpp).
+  gravity_ = g + Vec3::Zero();
   forces_valid_ = false;
 }
 

@@ -285,7 +285,6 @@ class Level {
   Real drift_bound_ = INFINITY;
   // Rebuild scratch kept between rebuilds: fresh large buffers would cost page faults each time.
   std::vector<Index> scratch_order_, scratch_index_;
-  std::vector<GlobalId> scratch_keys_;
   ContactStats stats_;
   GuardLimits guards_;
   Real guard_r_min_ = INFINITY;   // smallest radius over the ranks (m), at the run's start / build

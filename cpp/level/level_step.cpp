@@ -75,12 +75,8 @@ void Level::save_histories() {
   // Key every entry by its partner (global id / wall index) while the indices are valid.
   ContactList& pairs = contacts_.pairs;
   ContactList& walls = contacts_.walls;
-  std::vector<GlobalId>& keys = scratch_keys_;
-  keys.resize(pairs.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs.partner[k]];
-  contacts_.pair_carry.save(pairs, keys);
-  keys.assign(walls.partner.begin(), walls.partner.end());
-  contacts_.wall_carry.save(walls, keys);
+  contacts_.pair_carry.save(pairs, PartnerKey{ps_.id.data()});
+  contacts_.wall_carry.save(walls, PartnerKey{});
   std::vector<Index>& origin = contacts_.origin;
   origin.resize(ps_.n_owned());
   for (Index i = 0; i < ps_.n_owned(); ++i) origin[i] = i;
@@ -143,12 +139,8 @@ void Level::rebuild() {
   walls_.build_mesh_bins(r_max + skin_, cutoff);
   build_wall_list(ps_, walls_.walls(), walls_.primitives().first, skin_, walls);
 
-  std::vector<GlobalId>& keys = scratch_keys_;
-  keys.resize(pairs.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) keys[k] = ps_.id[pairs.partner[k]];
-  contacts_.pair_carry.restore(origin, keys, pairs);
-  keys.assign(walls.partner.begin(), walls.partner.end());
-  contacts_.wall_carry.restore(origin, keys, walls);
+  contacts_.pair_carry.restore(origin, PartnerKey{ps_.id.data()}, pairs);
+  contacts_.wall_carry.restore(origin, PartnerKey{}, walls);
   contacts_.pair_carry.clear();
   contacts_.wall_carry.clear();
 

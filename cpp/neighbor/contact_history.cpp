@@ -4,7 +4,7 @@
 
 namespace grainscale {
 
-void HistoryCarry::save(const ContactList& list, const std::vector<GlobalId>& partner_key) {
+void HistoryCarry::save(const ContactList& list, PartnerKey key) {
   stride_ = list.history_stride;
   const Index n = list.first.empty() ? 0 : static_cast<Index>(list.first.size()) - 1;
   first_.assign(n + 1, 0);
@@ -15,15 +15,15 @@ void HistoryCarry::save(const ContactList& list, const std::vector<GlobalId>& pa
     for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
       const Real* h = list.history.data() + static_cast<std::size_t>(k) * stride_;
       if (!list.touching[k]) continue;
-      keys_.push_back(partner_key[k]);
+      keys_.push_back(key(list.partner[k]));
       values_.insert(values_.end(), h, h + stride_);
     }
   }
   first_[n] = static_cast<Index>(keys_.size());
 }
 
-void HistoryCarry::restore(const std::vector<Index>& origin,
-                           const std::vector<GlobalId>& partner_key, ContactList& list) const {
+void HistoryCarry::restore(const std::vector<Index>& origin, PartnerKey key,
+                           ContactList& list) const {
   if (keys_.empty() || stride_ != list.history_stride) return;
   const Index n = static_cast<Index>(list.first.size()) - 1;
   for (Index i = 0; i < n; ++i) {
@@ -32,8 +32,9 @@ void HistoryCarry::restore(const std::vector<Index>& origin,
     const Index b = first_[o], e = first_[o + 1];
     if (b == e) continue;
     for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+      const GlobalId partner_key = key(list.partner[k]);
       for (Index s = b; s < e; ++s) {
-        if (keys_[s] != partner_key[k]) continue;
+        if (keys_[s] != partner_key) continue;
         std::copy(values_.begin() + static_cast<std::size_t>(s) * stride_,
                   values_.begin() + static_cast<std::size_t>(s + 1) * stride_,
                   list.history.begin() + static_cast<std::size_t>(k) * stride_);

@@ -11,14 +11,20 @@
 
 namespace grainscale {
 
+// The key of a list entry from its partner: the partner's global id (particle pairs: `id` is
+// the particles' ids at the time) or, without ids, the partner index itself (walls).
+struct PartnerKey {
+  const GlobalId* id = nullptr;
+  GlobalId operator()(Index partner) const { return id ? id[partner] : GlobalId(partner); }
+};
+
 class HistoryCarry {
  public:
-  // Saves the touching entries of `list`; partner_key[k] is the key of entry k.
-  void save(const ContactList& list, const std::vector<GlobalId>& partner_key);
+  // Saves the touching entries of `list`, keyed by key(partner).
+  void save(const ContactList& list, PartnerKey key);
   // Fills the history of a freshly built `list`. origin[i] is the index particle i had when
-  // save() ran (-1 for particles added since).
-  void restore(const std::vector<Index>& origin, const std::vector<GlobalId>& partner_key,
-               ContactList& list) const;
+  // save() ran (-1 for particles added since); key as for save(), of the new partners.
+  void restore(const std::vector<Index>& origin, PartnerKey key, ContactList& list) const;
   // Forgets the saved entries, keeping the buffers (rebuilds reuse them).
   void clear() {
     first_.clear();

@@ -2,7 +2,10 @@
 // batched pair loop (contact/pair_loop.hpp) the forces, torques and histories of a loop that
 // takes one contact at a time, in the same summation order: bit for bit, for every law and
 // setting, with two materials (lanes of different pairs) and histories on every branch
-// (sticking and sliding springs, EEPA loading and unloading, linear stiffness stored or not).
+// (sticking and sliding springs, EEPA loading and unloading, linear stiffness stored or not);
+// with one sphere much larger than the rest (rows longer than a batch). The batched wall loop
+// (contact/wall_loop.hpp) likewise gives the one-contact wall loop's bits, loads on the walls
+// included.
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -12,6 +15,7 @@
 
 #include "contact/contact_law.hpp"
 #include "contact/pair_loop.hpp"
+#include "contact/wall_loop.hpp"
 #include "expect.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -123,7 +127,7 @@ void check_law_lanes(const Law& law, const std::string& tag, std::mt19937_64& rn
       for (int q = 0; q < 15; ++q) in[q][l] = values[q];
       for (int s = 0; s < S; ++s) columns[s][l] = k.history[s];
     }
-    auto column = [&](int q) { return gs::detail::load_lanes<gs::LaneReal>(in[q]); };
+    auto column = [&](int q) { return gs::load_lanes<gs::LaneReal>(in[q]); };
     lanes.normal = {column(0), column(1), column(2)};
     lanes.overlap = column(3);
     lanes.r_eff = column(4);
@@ -133,7 +137,7 @@ void check_law_lanes(const Law& law, const std::string& tag, std::mt19937_64& rn
     lanes.w_rel = {column(9), column(10), column(11)};
     lanes.rolling_inertia = column(12);
     gs::LaneReal h[S];
-    for (int s = 0; s < S; ++s) h[s] = gs::detail::load_lanes<gs::LaneReal>(columns[s]);
+    for (int s = 0; s < S; ++s) h[s] = gs::load_lanes<gs::LaneReal>(columns[s]);
     gs::ContactLanesOutput<gs::LaneReal> packed;
     if constexpr (W == 1)
       packed = law.force_lanes(gs::Param<typename Law::Pair, Real>(*pairs[0]), lanes, h);
@@ -158,10 +162,17 @@ void check_law_lanes(const Law& law, const std::string& tag, std::mt19937_64& rn
 }
 
 // A dense random packing of two materials (overlaps up to 5 % of d, list with a skin).
-void make_packing(gs::ParticleStore& ps, std::mt19937_64& rng) {
+// big: one sphere of 5 d among them, with the smallest id, so that its row (over a hundred
+// entries) spans several batches.
+void make_packing(gs::ParticleStore& ps, std::mt19937_64& rng, bool big = false) {
   std::uniform_real_distribution<Real> u(-1, 1), pos(0, 1);
   const int side = 9;
   const Real d = 1e-3, spacing = 0.97 * d;
+  if (big) {
+    const Real r = 2.5 * d, m = 2500.0 * (4.0 / 3.0) * M_PI * r * r * r;
+    ps.add_owned(-1, Vec3(4, 4, 4) * spacing, Vec3(0.01, 0, 0), Vec3(0, 5, 0), r, m,
+                 0.4 * m * r * r, 1);
+  }
   Index id = 0;
   for (int a = 0; a < side; ++a)
     for (int b = 0; b < side; ++b)
@@ -175,6 +186,16 @@ void make_packing(gs::ParticleStore& ps, std::mt19937_64& rng) {
                      r, m, 0.4 * m * r * r, static_cast<std::int32_t>(pos(rng) * 2));
         ++id;
       }
+}
+
+// Before step `step` of a test: the particles moved back or forth (contacts open and close),
+// the forces and torques reset.
+void start_step(gs::ParticleStore& p, int step, Real dt) {
+  for (Index i = 0; i < p.n_owned(); ++i) {
+    p.position[i] += p.velocity[i] * (5 * dt) * (step % 2 ? 1 : -1);
+    p.force[i] = Vec3(0, 0, -1e-6);
+    p.torque[i].setZero();
+  }
 }
 
 // The pair loop as one contact at a time (the reference order): row by row, f[j] at once,
@@ -225,35 +246,38 @@ void reference_pair_forces(const Law& law, gs::ParticleStore& ps, gs::ContactLis
 }
 
 template <class Law>
-void check_pair_loop(const Law& law, const std::string& tag, std::mt19937_64& rng) {
-  gs::ParticleStore ps;
-  make_packing(ps, rng);
+void check_pair_loop(const Law& law, const std::string& tag, std::mt19937_64& rng,
+                     bool big = false) {
+  // Two stores built alike (a copy of a ParticleStore shares its arrays).
+  gs::ParticleStore ps, reference_ps;
+  std::mt19937_64 twin = rng;
+  make_packing(ps, rng, big);
+  make_packing(reference_ps, twin, big);
   const Real skin = 1e-4;
+  Real r_max = 0;
+  for (Index i = 0; i < ps.n_owned(); ++i) r_max = std::max(r_max, ps.radius[i]);
+  const Real cutoff = 2 * r_max + skin;
   gs::ContactList list;
   list.history_stride = Law::kHistorySize;
   gs::CellGrid grid;
-  grid.build(ps.position.data(), ps.n_local(), 1.04e-3 + skin, 1 << 20);
-  gs::build_pair_list(ps, grid, 1.04e-3 + skin, skin, list);
+  grid.build(ps.position.data(), ps.n_local(), cutoff, 1 << 20);
+  gs::build_pair_list(ps, grid, cutoff, skin, list);
+  if (big) EXPECT(list.first[1] - list.first[0] > 64, tag + ": a row longer than a batch");
   gs::ContactList reference = list;
-  gs::ParticleStore reference_ps = ps;
   gs::ContactStats stats;
   const Real dt = 2e-6;
-  // Several steps, the particles moved between them: histories develop, contacts open.
+  // Several steps, the particles moved between them: histories develop, contacts open. The
+  // forces are compared after every step (each loop's own sums).
+  bool forces = true, torques = true;
   for (int step = 0; step < 6; ++step) {
-    for (gs::ParticleStore* p : {&ps, &reference_ps})
-      for (Index i = 0; i < p->n_owned(); ++i) {
-        p->position[i] += p->velocity[i] * (5 * dt) * (step % 2 ? 1 : -1);
-        p->force[i] = Vec3(0, 0, -1e-6);
-        p->torque[i].setZero();
-      }
+    for (gs::ParticleStore* p : {&ps, &reference_ps}) start_step(*p, step, dt);
     list.touching_share = step % 2 ? 0.0 : 1.0;  // both loops: one by one and batched
     gs::accumulate_pair_forces<Law, true, false>(law, ps, list, dt, stats);
     reference_pair_forces(law, reference_ps, reference, dt);
-  }
-  bool forces = true, torques = true;
-  for (Index i = 0; i < ps.n_owned(); ++i) {
-    forces = forces && same_bits(ps.force[i], reference_ps.force[i]);
-    torques = torques && same_bits(ps.torque[i], reference_ps.torque[i]);
+    for (Index i = 0; i < ps.n_owned(); ++i) {
+      forces = forces && same_bits(ps.force[i], reference_ps.force[i]);
+      torques = torques && same_bits(ps.torque[i], reference_ps.torque[i]);
+    }
   }
   bool history = list.history.size() == reference.history.size();
   for (std::size_t k = 0; history && k < list.history.size(); ++k)
@@ -262,6 +286,99 @@ void check_pair_loop(const Law& law, const std::string& tag, std::mt19937_64& rn
   EXPECT(torques, tag + ": pair loop torques differ from the one-contact loop");
   EXPECT(history, tag + ": pair loop histories differ from the one-contact loop");
   EXPECT(list.touching == reference.touching, tag + ": touching flags differ");
+}
+
+// The wall loop as one contact at a time (the reference order), analytic walls only.
+template <class Law>
+void reference_wall_forces(const Law& law, gs::ParticleStore& ps, std::vector<gs::Wall>& walls,
+                           gs::ContactList& list, Real dt) {
+  constexpr int S = Law::kHistorySize;
+  for (Index i = 0; i < ps.n_owned(); ++i)
+    for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+      gs::Wall& wall = walls[list.partner[k]];
+      Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
+      const Real ri = ps.radius[i];
+      gs::WallContact g;
+      if (!wall.closest(ps.position[i], g) || g.distance >= ri) {
+        if (list.touching[k]) std::fill(h, h + S, Real(0));
+        list.touching[k] = 0;
+        continue;
+      }
+      const Real overlap = ri - g.distance, ai = ri - 0.5 * overlap;
+      const Vec3 vrel = ps.velocity[i] - ai * ps.angular_velocity[i].cross(g.normal) -
+                        wall.surface_velocity(g.point);
+      gs::ContactInput c{g.normal, overlap, ri, ps.mass[i], vrel, dt};
+      c.w_rel = ps.angular_velocity[i] - wall.angular_velocity;
+      c.rolling_inertia = 1 / ps.inv_rolling_inertia[i];
+      list.touching[k] = 1;
+      const gs::ContactOutput out = law.force(law.pair(ps.material[i], wall.law_material), c, h);
+      ps.force[i] += out.force;
+      ps.torque[i] -= ai * g.normal.cross(out.force);
+      wall.force -= out.force;
+      wall.torque -= (g.point - wall.origin).cross(out.force);
+      if constexpr (Law::kRolling) {
+        ps.torque[i] += out.rolling_torque;
+        wall.torque -= out.rolling_torque;
+      }
+    }
+}
+
+// The batched wall loop (contact/wall_loop.hpp) against the reference: a moving floor, a side
+// plane turning about its normal, a cylinder touching the same side (three walls, two
+// materials).
+template <class Law>
+void check_wall_loop(const Law& law, const std::string& tag, std::mt19937_64& rng) {
+  gs::ParticleStore ps, reference_ps;
+  std::mt19937_64 twin = rng;
+  make_packing(ps, rng);
+  make_packing(reference_ps, twin);
+  std::vector<gs::Wall> walls(3);
+  walls[0].point = Vec3(0, 0, -0.49e-3);
+  walls[0].velocity = Vec3(0.02, -0.01, 0);
+  walls[1].point = Vec3(-0.49e-3, 0, 0);
+  walls[1].normal = Vec3::UnitX();
+  walls[1].angular_velocity = Vec3(3, 0, 0);
+  walls[1].origin = Vec3(0, 4e-3, 4e-3);
+  walls[2].shape = gs::WallShape::Cylinder;
+  walls[2].point = Vec3(-4e-3, 3.88e-3, 0);
+  walls[2].axis = Vec3::UnitZ();
+  walls[2].radius = 3.53e-3;
+  walls[2].inside = false;
+  walls[2].material = 0;
+  for (gs::Wall& w : walls) w.law_material = w.material < 0 ? 2 : w.material;
+  const Real skin = 1e-4;
+  gs::ContactList list;
+  list.history_stride = Law::kHistorySize;
+  gs::build_wall_list(ps, walls, {0, 1, 2}, skin, list);
+  gs::WallPrimitives prims{{0, 1, 2}, {0, 1, 2}};
+  gs::ContactList reference = list;
+  std::vector<gs::Wall> reference_walls = walls;
+  gs::ContactStats stats;
+  const Real dt = 2e-6;
+  bool particles = true, loads = true;  // after every step
+  for (int step = 0; step < 6; ++step) {
+    for (gs::ParticleStore* p : {&ps, &reference_ps}) start_step(*p, step, dt);
+    for (std::vector<gs::Wall>* ws : {&walls, &reference_walls})
+      for (gs::Wall& w : *ws) w.force = w.torque = Vec3::Zero();
+    gs::accumulate_wall_forces<Law, true, false>(law, ps, walls, prims, list, dt, stats);
+    reference_wall_forces(law, reference_ps, reference_walls, reference, dt);
+    for (Index i = 0; i < ps.n_owned(); ++i)
+      particles = particles && same_bits(ps.force[i], reference_ps.force[i]) &&
+                  same_bits(ps.torque[i], reference_ps.torque[i]);
+    for (std::size_t w = 0; w < walls.size(); ++w)
+      loads = loads && same_bits(walls[w].force, reference_walls[w].force) &&
+              same_bits(walls[w].torque, reference_walls[w].torque);
+  }
+  bool touching = false;
+  for (std::uint8_t t : list.touching) touching = touching || t;
+  bool history = list.history.size() == reference.history.size();
+  for (std::size_t k = 0; history && k < list.history.size(); ++k)
+    history = same_bits(list.history[k], reference.history[k]);
+  EXPECT(touching, tag + ": the wall test has touching contacts");
+  EXPECT(particles, tag + ": wall loop forces or torques differ from the one-contact loop");
+  EXPECT(loads, tag + ": wall loads differ from the one-contact loop");
+  EXPECT(history, tag + ": wall loop histories differ from the one-contact loop");
+  EXPECT(list.touching == reference.touching, tag + ": wall touching flags differ");
 }
 
 template <std::size_t I = 0>
@@ -279,6 +396,8 @@ void check_every_law(std::mt19937_64& rng) {
       const std::string tag = Law::name() + " setting " + std::to_string(setting);
       check_law_lanes(std::get<I>(law), tag, rng);
       if (setting % 3 == 0) check_pair_loop(std::get<I>(law), tag, rng);
+      if (setting == 1) check_pair_loop(std::get<I>(law), tag + " (long row)", rng, true);
+      if (setting % 4 == 1) check_wall_loop(std::get<I>(law), tag, rng);
     }
     check_every_law<I + 1>(rng);
   }

@@ -285,7 +285,7 @@ void test_history_carry() {
         "test set-up: " + std::to_string(n_touching) + " touching of " +
             std::to_string(list.size()) + " entries");
   gs::HistoryCarry carry;
-  carry.save(list, keys);
+  carry.save(list, gs::PartnerKey{ps.id.data()});
   CHECK(carry.size() == n_touching, "saved " + std::to_string(carry.size()) +
                                         " histories, expected the " + std::to_string(n_touching) +
                                         " touching ones");
@@ -305,7 +305,7 @@ void test_history_carry() {
   build_list(ps, skin, 2 * ps.n_owned() + 64, rebuilt);
   std::vector<GlobalId> new_keys(rebuilt.size());
   for (std::size_t k = 0; k < rebuilt.size(); ++k) new_keys[k] = ps.id[rebuilt.partner[k]];
-  carry.restore(origin, new_keys, rebuilt);
+  carry.restore(origin, gs::PartnerKey{ps.id.data()}, rebuilt);
 
   std::size_t wrong = 0, restored = 0, new_pairs = 0;
   for (Index i = 0; i < ps.n_owned(); ++i)
