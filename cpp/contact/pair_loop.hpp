@@ -43,7 +43,7 @@ struct PairBatch {
   using Column = Real[kCapacity];
   alignas(64) Column dx, dy, dz, rsum, ri, rj, dvx, dvy, dvz, wix, wiy, wiz, wjx, wjy, wjz,
       inv_mass_sum;
-  alignas(64) Real rolling[kRollingValues][kCapacity];  // w_rel (3), 1 / I_r sum
+  alignas(64) Real rolling[kRollingValues][kCapacity];  // 1 / I_r sum
   // Results: the force on i, the torques a_i n x F and a_j n x F, the rolling torque on i.
   alignas(64) Column fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz;
   alignas(64) Real rolling_torque[kRollingValues > 0 ? 3 : 0][kCapacity];
@@ -98,9 +98,8 @@ template <class Law, bool kUpdate, class Batch>
                     LaneVec<T>::zero(),
                     splat<T>(0)};
   if constexpr (Law::kRolling) {
-    c.w_rel = {load_lanes<T>(batch.rolling[0] + b), load_lanes<T>(batch.rolling[1] + b),
-               load_lanes<T>(batch.rolling[2] + b)};
-    c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[3] + b);
+    c.w_rel = wi - wj;  // the subtraction a scalar loop does, lane by lane
+    c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[0] + b);
   }
   // The history of each lane, as one value per lane and history slot.
   alignas(64) Real columns[S][W];
@@ -156,7 +155,7 @@ template <class Law, bool kUpdate, bool kStats>
                                                      ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
   constexpr int W = kPackLanes;
-  using Batch = detail::PairBatch<Law::kRolling ? 4 : 0>;
+  using Batch = detail::PairBatch<Law::kRolling ? 1 : 0>;
   constexpr int kMinChunk = 16;  // fewer free slots: the batch is evaluated first
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
@@ -295,11 +294,7 @@ template <class Law, bool kUpdate, bool kStats>
       batch.wjz[c] = w[j][2];
       batch.inv_mass_sum[c] = im[i] + im[j];
       if constexpr (Law::kRolling) {
-        const Vec3 w_rel = w[i] - w[j];
-        batch.rolling[0][c] = w_rel[0];
-        batch.rolling[1][c] = w_rel[1];
-        batch.rolling[2][c] = w_rel[2];
-        batch.rolling[3][c] = irl[i] + irl[j];
+        batch.rolling[0][c] = irl[i] + irl[j];
       }
     }
     batch.count = q;
