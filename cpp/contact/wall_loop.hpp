@@ -1,9 +1,8 @@
 // The particle-wall force loop: the same contact law as particle pairs, with the wall as body j
 // (R_j, m_j infinite; its own material or the rigid pseudo-material). Accumulates the force and
-// torque (about the wall's origin) that the particles exert on each wall. Contacts with analytic
-// walls are gathered in a batch and the law evaluated on packs of them, then applied in order
-// (detail::WallBatch); mesh contacts are resolved and evaluated one at a time, after the batch
-// so far, so every sum is the one-contact-at-a-time loop's, bit for bit.
+// torque (about the wall's origin) that the particles exert on each wall. The touching contacts
+// are gathered in a batch, the law evaluated on packs of them and the contacts then applied in
+// order (detail::WallBatch), so every sum is the one-contact-at-a-time loop's, bit for bit.
 //
 // Mesh walls: a sphere near a shared edge or vertex is close to several triangles, but touches
 // the surface once. Per particle and mesh the touching triangles are resolved as follows:
@@ -144,10 +143,11 @@ inline void prefetch_wall_row(const ParticleStore& ps, const ContactList& list, 
   __builtin_prefetch(list.history.data() + static_cast<std::size_t>(k) * S, 1);
 }
 
-// Touching contacts with analytic walls (planes, cylinders, ...), gathered so that the law runs
-// on packs of kPackLanes contacts (core/simd_pack.hpp) and then replayed in order: the forces
-// and the sums on particles and walls are the bits of a one-contact-at-a-time loop. A mesh
-// contact is evaluated alone after the batch is emptied, so the order stays the same.
+// Touching particle-wall contacts, gathered so that the law runs on packs of kPackLanes contacts
+// (core/simd_pack.hpp) and then replayed in order: the forces and the sums on particles and
+// walls are the bits of a one-contact-at-a-time loop. A contact's history is copied in when it
+// is gathered (a mesh contact may take over the history of an entry released right after) and
+// written back, with its touch flag, at the replay.
 template <class Law>
 struct WallBatch {
   static constexpr int kCapacity = 64;  // a multiple of every lane width
@@ -269,48 +269,9 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
     const Vec3 xi = ps.position[i];
     const Real ri = ps.radius[i];
 
-    // One touching contact: entry k (its touch flag), history h, geometry g.
-    auto apply = [&](Wall& wall, int w, Index k, const Real* h_in, const WallContact& g) {
-      const Real overlap = ri - g.distance;
-      const Vec3& nrm = g.normal;
-      const Real ai = ri - 0.5 * overlap;
-      const Vec3 vrel =
-          ps.velocity[i] - ai * ps.angular_velocity[i].cross(nrm) - wall.surface_velocity(g.point);
-      ContactInput c{nrm, overlap, ri, ps.mass[i], vrel, dt};
-      if constexpr (Law::kRolling) {
-        c.w_rel = ps.angular_velocity[i] - wall.angular_velocity;
-        c.rolling_inertia = 1 / ps.inv_rolling_inertia[i];
-      }
-      const auto& pair = law.pair(ps.material[i], wall.law_material);
-      Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
-      ContactOutput out;
-      if constexpr (kUpdate) {
-        if (h != h_in) std::copy(h_in, h_in + S, h);
-        list.touching[k] = 1;
-        out = law.force(pair, c, h);
-      } else {
-        std::array<Real, S> scratch;
-        std::copy(h_in, h_in + S, scratch.begin());
-        out = law.force(pair, c, scratch.data());
-      }
-      const Vec3& F = out.force;
-      ps.force[i] += F;
-      ps.torque[i] -= ai * nrm.cross(F);
-      wall.force -= F;
-      wall.torque -= (g.point - wall.origin).cross(F);
-      if constexpr (Law::kRolling) {
-        ps.torque[i] += out.rolling_torque;
-        wall.torque -= out.rolling_torque;
-      }
-      if constexpr (kStats) {
-        ++stats.contacts;
-        stats.max_overlap_ratio = std::max(stats.max_overlap_ratio, overlap / ri);
-        if (stats.record)
-          stats.records.push_back({ps.id[i], -1 - GlobalId(w), overlap, nrm, F, i, -1});
-      }
-    };
-    // One touching contact with an analytic wall: into the batch (entry k, geometry g).
-    auto push = [&](const Wall& wall, int w, Index k, const WallContact& g) {
+    // One touching contact into the batch: entry k, its history h (a mesh contact may take
+    // over another entry's), geometry g.
+    auto push = [&](const Wall& wall, int w, Index k, const Real* h, const WallContact& g) {
       if (batch.count == Batch::kCapacity) flush();
       const int q = batch.count++;
       const Real overlap = ri - g.distance;
@@ -337,7 +298,6 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       batch.wy[q] = w_rel[1];
       batch.wz[q] = w_rel[2];
       batch.rolling_inertia[q] = rolling_inertia;
-      const Real* h = list.history.data() + static_cast<std::size_t>(k) * S;
       for (int s = 0; s < S; ++s) batch.history[s][q] = h[s];
       batch.pair[q] = &law.pair(ps.material[i], wall.law_material);
       batch.i[q] = i;
@@ -361,14 +321,13 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
       if (wall.shape != WallShape::Mesh) {
         WallContact g;
         if (wall.closest(xi, g) && g.distance < ri)
-          push(wall, w, k, g);
+          push(wall, w, k, list.history.data() + static_cast<std::size_t>(k) * S, g);
         else
           release(k);
         ++k;
         continue;
       }
-      // All entries of this mesh for particle i, evaluated one at a time after the batch.
-      flush();
+      // All entries of this mesh for particle i.
       Index end = k;
       while (end < e && prims.wall[list.partner[end]] == w) ++end;
       const TriangleMesh& mesh = *wall.mesh;
@@ -399,7 +358,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
         const Vec3 face_normal = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
                                      .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]])
                                      .normalized();
-        apply(wall, w, m.entry, h, {m.hit.point, dist > 0 ? Vec3(diff / dist) : face_normal, dist});
+        push(wall, w, m.entry, h, {m.hit.point, dist > 0 ? Vec3(diff / dist) : face_normal, dist});
       }
       for (Index m = k; m < end; ++m)
         if (counted[m - k] != 1) release(m);
