@@ -258,8 +258,8 @@ LawFigures time_law(bench::Packing& p, const grainscale::MaterialTable& material
     zero_forces(p.ps);
     grainscale::accumulate_pair_forces<Law, true, false>(law, p.ps, list, 20 * dt, stats);
   }
-  const std::vector<Real> history = list.history;
-  const std::vector<std::uint8_t> touching = list.touching;
+  const auto history = list.history;
+  const auto touching = list.touching;
 
   LawFigures fig;
   fig.name = Law::name();

@@ -14,10 +14,9 @@
 //      exactly the sequence of a one-contact-at-a-time loop; a row's sum goes to its particle
 //      where the next row starts, without a branch.
 // Pass 2 gives the scalar law's bits and pass 3 the scalar loop's summation order, so the
-// forces are the same bits for every lane width (tests/cpp/test_contact_lanes.cpp). Where few
-// entries touch, batching costs more than it saves: accumulate_pair_forces (at the end) then
-// takes one contact at a time (pair_loop_one_by_one.hpp), as it always does with
-// GRAINSCALE_SIMD=OFF.
+// forces are the same bits for every lane width (tests/cpp/test_contact_lanes.cpp). Builds
+// without SIMD packs take one contact at a time (pair_loop_one_by_one.hpp; see
+// accumulate_pair_forces at the end).
 #pragma once
 
 #include <algorithm>
@@ -236,7 +235,6 @@ template <class Law, bool kUpdate, bool kStats>
   // mispredict its exit at nearly every row. owner[k - k0] is the row of entry k.
   Index owner[Batch::kCapacity];
   Index row = 0;  // the row of entry k0
-  std::size_t touching_total = 0;
   for (Index k0 = 0; k0 < total;) {
     if (Batch::kCapacity - batch.count < kMinChunk) flush();
     const Index k1 = std::min<Index>(total, k0 + (Batch::kCapacity - batch.count));
@@ -277,7 +275,6 @@ template <class Law, bool kUpdate, bool kStats>
       }
       q += touch;
     }
-    touching_total += q - batch.count;
     // The rest of each touching contact's inputs.
     for (int c = batch.count; c < q; ++c) {
       const Index i = batch.i[c], j = batch.j[c];
@@ -303,18 +300,17 @@ template <class Law, bool kUpdate, bool kStats>
   flush();
   *row_f += fi;
   *row_t += ti;
-  if (kUpdate && !list.partner.empty())
-    list.touching_share = static_cast<double>(touching_total) / list.partner.size();
 }
 
-// The pair forces of the owned particles: batched in packs where a good share of the list
-// touches (beds), one contact at a time where few entries do (loose, falling systems). The
-// choice follows the share of the last evaluation and changes the speed, never the result.
+// The pair forces of the owned particles. SIMD builds batch in packs, in beds and loose systems
+// alike: with pass 1 free of branches per entry and per row, batching costs less than the
+// one-contact loop's branches even where few entries touch (bench/README.md). Scalar builds
+// (GRAINSCALE_SIMD=OFF) take one contact at a time: with one lane per pack the batch is only a
+// detour. Both give the same bits.
 template <class Law, bool kUpdate, bool kStats>
 void accumulate_pair_forces(const Law& law, ParticleStore& ps, ContactList& list, Real dt,
                             ContactStats& stats) {
-  constexpr double kBatchedShare = 0.4;
-  if (kPackLanes > 1 && list.touching_share >= kBatchedShare)
+  if constexpr (kPackLanes > 1)
     accumulate_pair_forces_batched<Law, kUpdate, kStats>(law, ps, list, dt, stats);
   else
     accumulate_pair_forces_one_by_one<Law, kUpdate, kStats>(law, ps, list, dt, stats);

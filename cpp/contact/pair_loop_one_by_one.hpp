@@ -1,8 +1,8 @@
 // The particle-particle force loop one contact at a time: the law's scalar form (T = Real) on
-// each touching entry as the scan meets it. pair_loop.hpp takes it where few entries touch (a
-// loose or falling system): there a predictable branch skips the non-touching entries, and
-// batching the few contacts would cost more than it saves. The same forces, torques and
-// histories as the batched loop, bit for bit (tests/cpp/test_contact_lanes.cpp).
+// each touching entry as the scan meets it. pair_loop.hpp takes it in builds without SIMD packs
+// (GRAINSCALE_SIMD=OFF): with one lane, batching contacts only adds a round trip through the
+// batch. The same forces, torques and histories as the batched loop, bit for bit
+// (tests/cpp/test_contact_lanes.cpp).
 // Torque arm: contact radius r - overlap/2 (as LIGGGHTS).
 #pragma once
 
@@ -16,6 +16,7 @@
 
 namespace grainscale {
 
+// kUpdate = false evaluates forces without advancing the history (set-up evaluations must
 // not advance the tangential springs). kStats fills `stats`.
 // flatten: everything the law calls is inlined. Left to its heuristics, GCC stops inlining
 // small Eigen expressions in the larger laws (EEPA, EPSD), and each call costs more than it does.
@@ -36,7 +37,6 @@ template <class Law, bool kUpdate, bool kStats>
   Vec3* t = ps.torque.data();
   const Index* partner = list.partner.data();
   Real* hist = list.history.data();
-  std::size_t touching_total = 0;
   for (Index i = 0; i < n; ++i) {
     const Index b = list.first[i], e = list.first[i + 1];
     if (b == e) continue;
@@ -58,7 +58,6 @@ template <class Law, bool kUpdate, bool kStats>
         }
         continue;
       }
-      ++touching_total;
       const Real dist = std::sqrt(d2);
       const Real overlap = rsum - dist;
       // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
@@ -98,8 +97,6 @@ template <class Law, bool kUpdate, bool kStats>
     f[i] += fi;
     t[i] += ti;
   }
-  if (kUpdate && !list.partner.empty())
-    list.touching_share = static_cast<double>(touching_total) / list.partner.size();
 }
 
 }  // namespace grainscale

@@ -257,7 +257,7 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
   // The particles with wall entries are a thin, scattered subset (those near a wall), listed at
   // the build (list.rows); each one's data is requested kLead particles ahead, which overlaps
   // the cache misses with the force work.
-  const std::vector<Index>& rows = list.rows;
+  const PageVector<Index>& rows = list.rows;
   const Index n_rows = static_cast<Index>(rows.size());
   constexpr Index kLead = 4;
   for (Index r = 0; r < std::min(kLead, n_rows); ++r)

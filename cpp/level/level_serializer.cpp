@@ -36,7 +36,7 @@ void put_list(LevelState& s, const std::string& key, const ContactList& l) {
   put_ints(s, key + "/first", l.first.data(), l.first.size());
   put_ints(s, key + "/partner", l.partner.data(), l.partner.size());
   put_ints(s, key + "/touching", l.touching.data(), l.touching.size());
-  s.reals[key + "/history"] = l.history;
+  s.reals[key + "/history"].assign(l.history.begin(), l.history.end());
 }
 
 void get_list(const LevelState& s, const std::string& key, ContactList& l) {
@@ -46,7 +46,8 @@ void get_list(const LevelState& s, const std::string& key, ContactList& l) {
   l.first.assign(first.begin(), first.end());
   l.partner.assign(partner.begin(), partner.end());
   l.touching.assign(touching.begin(), touching.end());
-  l.history = reals(s, key + "/history");
+  const auto& history = reals(s, key + "/history");
+  l.history.assign(history.begin(), history.end());
   if (l.touching.size() != l.partner.size() ||
       l.history.size() != l.partner.size() * static_cast<std::size_t>(l.history_stride))
     throw std::runtime_error("checkpoint contact list '" + key +

@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "core/page_vector.hpp"
 #include "core/types.hpp"
 #include "neighbor/neighbor_list.hpp"
 
@@ -61,9 +62,9 @@ class HistoryCarry {
   }
 
  private:
-  std::vector<Index> first_;
-  std::vector<GlobalId> keys_;
-  std::vector<Real> values_;
+  PageVector<Index> first_;
+  PageVector<GlobalId> keys_;
+  PageVector<Real> values_;
   int stride_ = 0;
 };
 

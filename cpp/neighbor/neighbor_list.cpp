@@ -20,9 +20,9 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff,
   // A pair found is stored at the particle with the smaller global id when that one is owned;
   // when it is a ghost the same pair is found again between its owner and an image of the
   // other particle (which is then stored), so it is skipped here.
-  std::vector<std::pair<Index, Index>>& found = list.scratch_pairs;
+  PageVector<std::pair<Index, Index>>& found = list.scratch_pairs;
   found.clear();
-  std::vector<Index>& count = list.scratch_count;
+  PageVector<Index>& count = list.scratch_count;
   count.assign(n + 1, 0);
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   for (int cz = 0; cz < nz; ++cz)

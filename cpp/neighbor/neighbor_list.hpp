@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/page_vector.hpp"
 #include "core/types.hpp"
 #include "geometry/wall.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -20,22 +21,19 @@
 namespace grainscale {
 
 struct ContactList {
-  std::vector<Index> first;    // n_owned + 1
-  std::vector<Index> partner;  // local particle index, or wall index
-  std::vector<Real> history;   // history_stride values per entry
+  PageVector<Index> first;    // n_owned + 1
+  PageVector<Index> partner;  // local particle index, or wall index
+  PageVector<Real> history;   // history_stride values per entry
   // 1 while the entry touches (its history may be non-zero). Lets the force loop skip the
   // history of the many non-touching entries instead of clearing it every step.
-  std::vector<std::uint8_t> touching;
-  // Touching entries / entries at the last force evaluation: whether the pair loop batches
-  // contacts in packs (its choice changes the speed, never the result).
-  double touching_share = 1;
+  PageVector<std::uint8_t> touching;
   int history_stride = 0;
   // Build scratch kept between rebuilds (fresh large buffers cost page faults each time).
-  std::vector<std::pair<Index, Index>> scratch_pairs;
-  std::vector<Index> scratch_count;
+  PageVector<std::pair<Index, Index>> scratch_pairs;
+  PageVector<Index> scratch_count;
   // The owned particles that have entries, ascending (index_rows). The wall loop walks only
   // these: near walls they are a thin, scattered subset.
-  std::vector<Index> rows;
+  PageVector<Index> rows;
 
   std::size_t size() const { return partner.size(); }
 };

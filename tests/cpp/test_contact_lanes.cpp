@@ -271,8 +271,10 @@ void check_pair_loop(const Law& law, const std::string& tag, std::mt19937_64& rn
   bool forces = true, torques = true;
   for (int step = 0; step < 6; ++step) {
     for (gs::ParticleStore* p : {&ps, &reference_ps}) start_step(*p, step, dt);
-    list.touching_share = step % 2 ? 0.0 : 1.0;  // both loops: one by one and batched
-    gs::accumulate_pair_forces<Law, true, false>(law, ps, list, dt, stats);
+    if (step % 2)  // both loops, whatever the lane width: one by one and batched
+      gs::accumulate_pair_forces_one_by_one<Law, true, false>(law, ps, list, dt, stats);
+    else
+      gs::accumulate_pair_forces_batched<Law, true, false>(law, ps, list, dt, stats);
     reference_pair_forces(law, reference_ps, reference, dt);
     for (Index i = 0; i < ps.n_owned(); ++i) {
       forces = forces && same_bits(ps.force[i], reference_ps.force[i]);

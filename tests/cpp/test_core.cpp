@@ -8,9 +8,12 @@
 //   material_validation  – MaterialTable rejects poisson_ratio 0.7 with the documented message;
 //   spring_rotation      – a spring turned with its contact: "rescale" keeps the length and lies
 //                          in the new tangent plane, "project" shortens it by cos(theta), and
-//                          the two-vector rotation equals two single ones bit for bit.
+//                          the two-vector rotation equals two single ones bit for bit;
+//   page_vector          – a PageVector grown from a few values past the mapping threshold
+//                          keeps its contents; its large buffers are mapped (page aligned).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <map>
@@ -31,6 +34,7 @@
 #include "contact/pair_loop.hpp"
 #include "contact/tangential_models.hpp"
 #include "core/errors.hpp"
+#include "core/page_vector.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "neighbor/contact_history.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -392,6 +396,23 @@ void test_spring_rotation() {
   }
 }
 
+void test_page_vector() {
+  gs::PageVector<double> v;
+  bool kept = true;
+  for (int k = 0; k < 200000; ++k) {
+    v.push_back(0.5 * k);
+    if ((k & (k + 1)) == 0)  // after every growth step: the contents so far
+      for (int m = 0; m <= k; ++m) kept = kept && v[m] == 0.5 * m;
+  }
+  CHECK(kept, "contents kept across growth");
+  CHECK(v.size() == 200000 && v.back() == 0.5 * 199999, "size and last value");
+  CHECK(reinterpret_cast<std::uintptr_t>(v.data()) % 4096 == 0,
+        "a buffer above the threshold is mapped (page aligned)");
+  v.assign(3, 1.0);  // shrinking keeps the buffer; a copy takes the ordinary allocator
+  const gs::PageVector<double> small(v.begin(), v.end());
+  CHECK(small.size() == 3 && small[2] == 1.0, "small copy");
+}
+
 }  // namespace
 
 int main() {
@@ -401,6 +422,7 @@ int main() {
       {"history_carry", test_history_carry},
       {"material_validation", test_material_validation},
       {"spring_rotation", test_spring_rotation},
+      {"page_vector", test_page_vector},
   };
   for (const auto& [name, fn] : tests) {
     const int before = g_failures;
