@@ -20,6 +20,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <type_traits>
 
 #include "contact/contact_input.hpp"
@@ -62,6 +63,31 @@ struct PairBatch {
     std::fill(entry + count, entry + end, entry[count - 1]);
   }
 };
+
+// Pass 3's running sum of a row (force or torque on i) as a vector of 4 (x, y, z, unused), so
+// that a new row resets it by a bitwise AND and the finished sum goes to an address picked by
+// bit masks: with selects GCC 12 turned the change of row back into a branch, which
+// mispredicts at nearly every row.
+using RowSum = Real __attribute__((vector_size(4 * sizeof(Real))));
+using RowMask = std::int64_t __attribute__((vector_size(4 * sizeof(Real))));
+
+// a where mask is all ones, b where it is zero.
+[[gnu::always_inline]] inline Real* pick(std::int64_t mask, Real* a, Real* b) {
+  const auto m = static_cast<std::uintptr_t>(mask);
+  return reinterpret_cast<Real*>((reinterpret_cast<std::uintptr_t>(a) & m) |
+                                 (reinterpret_cast<std::uintptr_t>(b) & ~m));
+}
+// s = +0 where mask is all ones, unchanged where it is zero (exactly +0: s * 0 would keep the
+// sign). Vectors by reference: no vector ABI where the target has no 256-bit registers.
+[[gnu::always_inline]] inline void zero_if(std::int64_t mask, RowSum& s) {
+  s = reinterpret_cast<RowSum>(reinterpret_cast<RowMask>(s) & ~(RowMask{} + mask));
+}
+// to[0..2] += s, as Vec3's +=.
+[[gnu::always_inline]] inline void add_to(Real* to, const RowSum& s) {
+  to[0] += s[0];
+  to[1] += s[1];
+  to[2] += s[2];
+}
 
 // Pass 2 on lanes [b, b + kPackLanes) of the batch.
 template <class Law, bool kUpdate, class Batch>
@@ -178,9 +204,10 @@ template <class Law, bool kUpdate, bool kStats>
   // -0: they start at m g, Level::set_gravity, and sums and differences of values that are not
   // -0 are not -0).
   Index open = -1;
-  Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
-  Vec3 scratch_f = Vec3::Zero(), scratch_t = Vec3::Zero();
-  Vec3 *row_f = &scratch_f, *row_t = &scratch_t;
+  using detail::RowSum;
+  RowSum fi{}, ti{};
+  Real scratch_f[3] = {}, scratch_t[3] = {};
+  Real *row_f = scratch_f, *row_t = scratch_t;
   auto flush = [&]() {
     const int count = batch.count;
     if (count == 0) return;
@@ -190,28 +217,24 @@ template <class Law, bool kUpdate, bool kStats>
       detail::evaluate_pack<Law, kUpdate>(law, batch, b, std::min(W, count - b), hist, dt);
     for (int q = 0; q < count; ++q) {
       const Index i = batch.i[q], j = batch.j[q];
-      const bool new_row = i != open;
-      Vec3* to_f = new_row ? row_f : &scratch_f;
-      Vec3* to_t = new_row ? row_t : &scratch_t;
-      *to_f += fi;
-      *to_t += ti;
-      const Real keep = new_row ? 0.0 : 1.0;  // a new row starts from zero, as fi.setZero()
-      fi = keep ? fi : Vec3::Zero();
-      ti = keep ? ti : Vec3::Zero();
+      const std::int64_t new_row = -static_cast<std::int64_t>(i != open);  // all ones or zero
+      detail::add_to(detail::pick(new_row, row_f, scratch_f), fi);
+      detail::add_to(detail::pick(new_row, row_t, scratch_t), ti);
+      detail::zero_if(new_row, fi);  // a new row starts from +0, as fi.setZero()
+      detail::zero_if(new_row, ti);
       open = i;
-      row_f = f + i;
-      row_t = t + i;
+      row_f = f[i].data();
+      row_t = t[i].data();
       const Vec3 F(batch.fx[q], batch.fy[q], batch.fz[q]);
-      const Vec3 tq_i(batch.tix[q], batch.tiy[q], batch.tiz[q]);
       const Vec3 tq_j(batch.tjx[q], batch.tjy[q], batch.tjz[q]);
-      fi += F;
-      ti -= tq_i;
+      fi += RowSum{F[0], F[1], F[2], 0};
+      ti -= RowSum{batch.tix[q], batch.tiy[q], batch.tiz[q], 0};
       f[j] -= F;
       t[j] -= tq_j;
       if constexpr (Law::kRolling) {
         const Vec3 M(batch.rolling_torque[0][q], batch.rolling_torque[1][q],
                      batch.rolling_torque[2][q]);
-        ti += M;
+        ti += RowSum{M[0], M[1], M[2], 0};
         t[j] -= M;
       }
       if constexpr (kStats) {
@@ -298,8 +321,8 @@ template <class Law, bool kUpdate, bool kStats>
     k0 = k1;
   }
   flush();
-  *row_f += fi;
-  *row_t += ti;
+  detail::add_to(row_f, fi);
+  detail::add_to(row_t, ti);
 }
 
 // The pair forces of the owned particles. SIMD builds batch in packs, in beds and loose systems
