@@ -281,13 +281,7 @@ template <class Law, bool kUpdate, bool kStats>
       const bool touch = d.squaredNorm() < rsum * rsum;
       batch.i[q] = i;
       batch.j[q] = j;
-      batch.ri[q] = ri;
-      batch.rj[q] = rj;
       batch.entry[q] = k;
-      batch.dx[q] = d[0];
-      batch.dy[q] = d[1];
-      batch.dz[q] = d[2];
-      batch.rsum[q] = rsum;
       // A contact that opens or closes (rare, hence predictable): a closed one forgets its
       // history, as a new contact starts from zero.
       if (kUpdate && touching[k] != touch) {
@@ -298,9 +292,18 @@ template <class Law, bool kUpdate, bool kStats>
       }
       q += touch;
     }
-    // The rest of each touching contact's inputs.
+    // Each touching contact's inputs (the geometry again: cheaper than storing it for every
+    // entry, the data is still in L1).
     for (int c = batch.count; c < q; ++c) {
       const Index i = batch.i[c], j = batch.j[c];
+      const Vec3 d = x[i] - x[j];
+      const Real ri = r[i], rj = r[j];
+      batch.ri[c] = ri;
+      batch.rj[c] = rj;
+      batch.dx[c] = d[0];
+      batch.dy[c] = d[1];
+      batch.dz[c] = d[2];
+      batch.rsum[c] = ri + rj;
       batch.pair[c] = one_material ? 0 : law.pair_index(mat[i], mat[j]);
       const Vec3 dv = v[i] - v[j];
       batch.dvx[c] = dv[0];
