@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
 
 #include "contact/contact_input.hpp"
@@ -64,12 +65,26 @@ struct PairBatch {
   }
 };
 
-// Pass 3's running sum of a row (force or torque on i) as a vector of 4 (x, y, z, unused), so
-// that a new row resets it by a bitwise AND and the finished sum goes to an address picked by
-// bit masks: with selects GCC 12 turned the change of row back into a branch, which
-// mispredicts at nearly every row.
-using RowSum = Real __attribute__((vector_size(4 * sizeof(Real))));
-using RowMask = std::int64_t __attribute__((vector_size(4 * sizeof(Real))));
+// Pass 3's running sum of a row (force or torque on i): x and y as a pair of doubles (one SSE2
+// register on every x86-64 target) and z, so that a new row resets it by a bitwise AND and the
+// finished sum goes to an address picked by bit masks. With selects GCC 12 turned the change of
+// row back into a branch, which mispredicts at nearly every row; a vector of four doubles
+// would do here with AVX but is split through memory without it (portable build 22 % slower).
+using Pair2 = Real __attribute__((vector_size(2 * sizeof(Real))));
+using Mask2 = std::int64_t __attribute__((vector_size(2 * sizeof(Real))));
+struct RowSum {
+  Pair2 xy{};
+  Real z = 0;
+  // The same operations, component by component, as Vec3's += and -=.
+  [[gnu::always_inline]] void add(Real x, Real y, Real zz) {
+    xy += Pair2{x, y};
+    z += zz;
+  }
+  [[gnu::always_inline]] void subtract(Real x, Real y, Real zz) {
+    xy -= Pair2{x, y};
+    z -= zz;
+  }
+};
 
 // a where mask is all ones, b where it is zero.
 [[gnu::always_inline]] inline Real* pick(std::int64_t mask, Real* a, Real* b) {
@@ -78,15 +93,19 @@ using RowMask = std::int64_t __attribute__((vector_size(4 * sizeof(Real))));
                                  (reinterpret_cast<std::uintptr_t>(b) & ~m));
 }
 // s = +0 where mask is all ones, unchanged where it is zero (exactly +0: s * 0 would keep the
-// sign). Vectors by reference: no vector ABI where the target has no 256-bit registers.
+// sign).
 [[gnu::always_inline]] inline void zero_if(std::int64_t mask, RowSum& s) {
-  s = reinterpret_cast<RowSum>(reinterpret_cast<RowMask>(s) & ~(RowMask{} + mask));
+  s.xy = reinterpret_cast<Pair2>(reinterpret_cast<Mask2>(s.xy) & ~(Mask2{} + mask));
+  std::int64_t z;
+  std::memcpy(&z, &s.z, sizeof z);
+  z &= ~mask;
+  std::memcpy(&s.z, &z, sizeof z);
 }
 // to[0..2] += s, as Vec3's +=.
 [[gnu::always_inline]] inline void add_to(Real* to, const RowSum& s) {
-  to[0] += s[0];
-  to[1] += s[1];
-  to[2] += s[2];
+  to[0] += s.xy[0];
+  to[1] += s.xy[1];
+  to[2] += s.z;
 }
 
 // Pass 2 on lanes [b, b + kPackLanes) of the batch.
@@ -205,7 +224,7 @@ template <class Law, bool kUpdate, bool kStats>
   // -0 are not -0).
   Index open = -1;
   using detail::RowSum;
-  RowSum fi{}, ti{};
+  RowSum fi, ti;
   Real scratch_f[3] = {}, scratch_t[3] = {};
   Real *row_f = scratch_f, *row_t = scratch_t;
   auto flush = [&]() {
@@ -227,14 +246,14 @@ template <class Law, bool kUpdate, bool kStats>
       row_t = t[i].data();
       const Vec3 F(batch.fx[q], batch.fy[q], batch.fz[q]);
       const Vec3 tq_j(batch.tjx[q], batch.tjy[q], batch.tjz[q]);
-      fi += RowSum{F[0], F[1], F[2], 0};
-      ti -= RowSum{batch.tix[q], batch.tiy[q], batch.tiz[q], 0};
+      fi.add(F[0], F[1], F[2]);
+      ti.subtract(batch.tix[q], batch.tiy[q], batch.tiz[q]);
       f[j] -= F;
       t[j] -= tq_j;
       if constexpr (Law::kRolling) {
         const Vec3 M(batch.rolling_torque[0][q], batch.rolling_torque[1][q],
                      batch.rolling_torque[2][q]);
-        ti += RowSum{M[0], M[1], M[2], 0};
+        ti.add(M[0], M[1], M[2]);
         t[j] -= M;
       }
       if constexpr (kStats) {
