@@ -34,6 +34,14 @@ bool same_bits(const Vec3& a, const Vec3& b) {
   return same_bits(a[0], b[0]) && same_bits(a[1], b[1]) && same_bits(a[2], b[2]);
 }
 
+// The two lists' histories, value for value, bit for bit.
+bool same_histories(const gs::ContactList& a, const gs::ContactList& b) {
+  if (a.history.size() != b.history.size()) return false;
+  for (std::size_t k = 0; k < a.history.size(); ++k)
+    if (!same_bits(a.history[k], b.history[k])) return false;
+  return true;
+}
+
 // Two materials; the pair constants differ between all four combinations (and the walls).
 void prepare(gs::ContactLaw& law) {
   gs::MaterialTable materials;
@@ -281,9 +289,7 @@ void check_pair_loop(const Law& law, const std::string& tag, std::mt19937_64& rn
       torques = torques && same_bits(ps.torque[i], reference_ps.torque[i]);
     }
   }
-  bool history = list.history.size() == reference.history.size();
-  for (std::size_t k = 0; history && k < list.history.size(); ++k)
-    history = same_bits(list.history[k], reference.history[k]);
+  const bool history = same_histories(list, reference);
   EXPECT(forces, tag + ": pair loop forces differ from the one-contact loop");
   EXPECT(torques, tag + ": pair loop torques differ from the one-contact loop");
   EXPECT(history, tag + ": pair loop histories differ from the one-contact loop");
@@ -373,9 +379,7 @@ void check_wall_loop(const Law& law, const std::string& tag, std::mt19937_64& rn
   }
   bool touching = false;
   for (std::uint8_t t : list.touching) touching = touching || t;
-  bool history = list.history.size() == reference.history.size();
-  for (std::size_t k = 0; history && k < list.history.size(); ++k)
-    history = same_bits(list.history[k], reference.history[k]);
+  const bool history = same_histories(list, reference);
   EXPECT(touching, tag + ": the wall test has touching contacts");
   EXPECT(particles, tag + ": wall loop forces or torques differ from the one-contact loop");
   EXPECT(loads, tag + ": wall loads differ from the one-contact loop");
