@@ -1,7 +1,9 @@
 """Fingerprints of the engine's behaviour, to show that a change of structure changed none of it.
 
-Runs four cases and prints, per case, the SHA-256 of the arrays it ends with (particles sorted by
-id, float64 bytes as computed): the settle case (20 000 spheres, 2000 steps), the hopper demo
+Runs seven cases and prints, per case, the SHA-256 of the arrays it ends with (particles sorted by
+id, float64 bytes as computed): the settle case (20 000 spheres, 2000 steps), the same case with
+10 000 spheres for 10 000 steps (0.1 s: the bed forms) under three laws with rolling resistance
+(Hertz-Mindlin + EPSD, linear + CDT with the incremental spring, EEPA + EPSD2), the hopper demo
 (``--quick``: its history and its last particle snapshot), and the quick MLCG silo as 2 -> 1 and
 4 -> 2 -> 1 (each level's particles, the discharge history, the books). Run it before and after
 a redesign on the same machine and build; equal lines mean identical results bit for bit (a
@@ -56,6 +58,25 @@ def settle() -> str:
     return digest(particles(sim))
 
 
+def settle_rolling(law: str) -> str:
+    case = SettleCase(n_particles=10_000, steps=10_000)
+    position, velocity = initial_state(case)
+    contact = {
+        "hertz+epsd": gs.contact.HertzMindlin(rolling=gs.contact.EPSD(rolling_friction=0.1)),
+        "linear+cdt": gs.contact.Linear(
+            rolling=gs.contact.CDT(rolling_friction=0.1), tangential_history="incremental"
+        ),
+        "eepa+epsd2": gs.contact.EEPA(
+            rolling=gs.contact.EPSD2(rolling_friction=0.1),
+            adhesive_stiffness=50.0,
+            pull_off_force=-1e-4,
+        ),
+    }[law]
+    sim = settle_simulation(gs, case, position, velocity, contact=contact)
+    sim.run(steps=case.steps, progress=False)
+    return digest(particles(sim))
+
+
 def hopper() -> str:
     from grainscale.examples import hopper_demo
 
@@ -82,6 +103,9 @@ def mlcg(levels: tuple[float, ...]) -> str:
 
 CASES = {
     "settle 20k, 2000 steps": settle,
+    "settle 10k, hertz+epsd": lambda: settle_rolling("hertz+epsd"),
+    "settle 10k, linear+cdt, incremental": lambda: settle_rolling("linear+cdt"),
+    "settle 10k, eepa+epsd2": lambda: settle_rolling("eepa+epsd2"),
     "hopper demo --quick": hopper,
     "quick MLCG silo 2 -> 1": lambda: mlcg((2, 1)),
     "quick MLCG silo 4 -> 2 -> 1": lambda: mlcg((4, 2, 1)),

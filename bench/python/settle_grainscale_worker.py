@@ -135,12 +135,13 @@ def settle_simulation(
     velocity: np.ndarray,
     guards: bool = True,
     lost_particles: str = "warn",
+    contact: Any = None,
 ) -> Any:
     """The settle case: the particles in a closed box of six one-sided planes of their material
-    (normals into the box)."""
+    (normals into the box). ``contact``: another law than the LIGGGHTS-matched Hertz-Mindlin."""
     hi = case.box_hi
     sim, mat = liggghts_matched_simulation(
-        gs, case, (0.0, 0.0, 0.0), hi, position, velocity, guards, lost_particles
+        gs, case, (0.0, 0.0, 0.0), hi, position, velocity, guards, lost_particles, contact
     )
     walls = [
         ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
@@ -177,12 +178,13 @@ def liggghts_matched_simulation(
     velocity: np.ndarray,
     guards: bool = True,
     lost_particles: str = "warn",
+    contact: Any = None,
 ) -> tuple[Any, Any]:
     """A closed box with gravity along -z, the particles, and the material and Hertz-Mindlin law
     set as LIGGGHTS' 'gran model hertz tangential history' (shared by the benchmark workers;
     ``case`` has the fields of SettleCase's physics). ``guards=False`` switches the run-time
     guards off; ``lost_particles`` is the lost-particle policy (both grainscale's defaults
-    otherwise). Returns (simulation, material)."""
+    otherwise); ``contact`` replaces the law. Returns (simulation, material)."""
     mat = gs.Material(
         density=case.density,
         youngs_modulus=case.youngs_modulus,
@@ -199,7 +201,7 @@ def liggghts_matched_simulation(
     )
     sim = gs.Simulation(
         domain=gs.Box(lo=lo, hi=hi, periodic=(False, False, False)),
-        contact=law,
+        contact=law if contact is None else contact,
         gravity=(0.0, 0.0, -case.gravity),
         time_step=case.time_step,
         skin=case.skin,

@@ -46,6 +46,7 @@ class ContactModel {
   static constexpr int kRollingOffset = kTangentialOffset + MindlinTangential::kHistorySize;
   static constexpr int kHistorySize = kRollingOffset + Rolling::kHistorySize;
   static constexpr bool kRolling = Rolling::kActive;
+  static constexpr bool kRollingInertia = Rolling::kInertia;  // ContactLanes::rolling_inertia
 
   struct Pair {
     typename Normal::Pair normal;

@@ -7,9 +7,12 @@
 //      a loop per row (rows hold two or three entries: the exit of a loop per row mispredicts
 //      at nearly every row): the overlap test per entry, without branches in a bed (a contact
 //      that closes forgets its history), then each touching contact's inputs gathered into the
-//      batch, one array per quantity (the accesses to particle j happen here);
+//      batch, one array per quantity (the accesses to particle j happen here); the velocities
+//      of j and the touching contacts' histories are prefetched on the way, as the hardware
+//      cannot guess either address (bench_pair_loop: 5-20 % per law);
 //   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
-//      square roots of kPackLanes contacts in one instruction each;
+//      square roots of kPackLanes contacts in one instruction each; the histories in and out of
+//      columns by core/lane_columns.hpp;
 //   3. replay the batch in list order, adding each contact's force and torques to i and j in
 //      exactly the sequence of a one-contact-at-a-time loop; a row's sum goes to its particle
 //      where the next row starts, without a branch.
@@ -27,6 +30,7 @@
 #include "contact/contact_input.hpp"
 #include "contact/contact_stats.hpp"
 #include "contact/pair_loop_one_by_one.hpp"
+#include "core/lane_columns.hpp"
 #include "core/simd_pack.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "state/particle_store.hpp"
@@ -37,17 +41,17 @@ namespace detail {
 
 // The touching contacts of one batch, a structure of arrays (pass 1 writes, pass 2 reads
 // packs of it, pass 3 reads the results). Lives on the stack: about 20 kB.
-template <int kRollingValues>
+template <bool kRolling, bool kInertia>
 struct PairBatch {
   static constexpr int kCapacity = 64;  // a multiple of every lane width
   static_assert(kCapacity % kPackLanes == 0);
   using Column = Real[kCapacity];
   alignas(64) Column dx, dy, dz, rsum, ri, rj, dvx, dvy, dvz, wix, wiy, wiz, wjx, wjy, wjz,
       inv_mass_sum;
-  alignas(64) Real rolling[kRollingValues][kCapacity];  // 1 / I_r sum
+  alignas(64) Real rolling[kInertia ? 1 : 0][kCapacity];  // 1 / I_r sum
   // Results: the force on i, the torques a_i n x F and a_j n x F, the rolling torque on i.
   alignas(64) Column fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz;
-  alignas(64) Real rolling_torque[kRollingValues > 0 ? 3 : 0][kCapacity];
+  alignas(64) Real rolling_torque[kRolling ? 3 : 0][kCapacity];
   alignas(64) Column overlap, nx, ny, nz;  // for the statistics
   Index i[kCapacity], j[kCapacity], entry[kCapacity];
   int pair[kCapacity];
@@ -58,8 +62,7 @@ struct PairBatch {
     for (Real* column :
          {dx, dy, dz, rsum, ri, rj, dvx, dvy, dvz, wix, wiy, wiz, wjx, wjy, wjz, inv_mass_sum})
       std::fill(column + count, column + end, column[count - 1]);
-    for (int q = 0; q < kRollingValues; ++q)
-      std::fill(rolling[q] + count, rolling[q] + end, rolling[q][count - 1]);
+    if constexpr (kInertia) std::fill(rolling[0] + count, rolling[0] + end, rolling[0][count - 1]);
     std::fill(pair + count, pair + end, pair[count - 1]);
     std::fill(entry + count, entry + end, entry[count - 1]);
   }
@@ -143,28 +146,23 @@ template <class Law, bool kUpdate, class Batch>
                     splat<T>(0)};
   if constexpr (Law::kRolling) {
     c.w_rel = wi - wj;  // the subtraction a scalar loop does, lane by lane
-    c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[0] + b);
   }
+  if constexpr (Law::kRollingInertia) c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[0] + b);
   // The history of each lane, as one value per lane and history slot.
-  alignas(64) Real columns[S][W];
   const typename Law::Pair* pairs[W];
   std::size_t at[W];  // where each lane's history starts
   for (int l = 0; l < W; ++l) {
     pairs[l] = &law.pair_at(batch.pair[b + l]);
     at[l] = static_cast<std::size_t>(batch.entry[b + l]) * S;
-    for (int s = 0; s < S; ++s) columns[s][l] = history[at[l] + s];
   }
   T h[S];
-  for (int s = 0; s < S; ++s) h[s] = load_lanes<T>(columns[s]);
+  load_columns<S>(history, at, h);
   ContactLanesOutput<T> out;
   if constexpr (std::is_same_v<T, Real>)
     out = law.force_lanes(Param<typename Law::Pair, Real>(*pairs[0]), c, h);
   else
     out = law.force_lanes(Param<typename Law::Pair, T>::of(pairs), c, h);
-  if constexpr (kUpdate)
-    for (int l = 0; l < valid; ++l) {
-      for (int s = 0; s < S; ++s) history[at[l] + s] = lane(h[s], l);
-    }
+  if constexpr (kUpdate) store_columns<S>(history, at, valid, h);
   const LaneVec<T>& F = out.force;
   const LaneVec<T> nxf = cross(nrm, F);
   const LaneVec<T> ti = ai * nxf, tj = aj * nxf;
@@ -199,7 +197,7 @@ template <class Law, bool kUpdate, bool kStats>
                                                      ContactStats& stats) {
   constexpr int S = Law::kHistorySize;
   constexpr int W = kPackLanes;
-  using Batch = detail::PairBatch<Law::kRolling ? 1 : 0>;
+  using Batch = detail::PairBatch<Law::kRolling, Law::kRollingInertia>;
   constexpr int kMinChunk = 16;  // fewer free slots: the batch is evaluated first
   const Index n = ps.n_owned();
   const Vec3* x = ps.position.data();
@@ -298,6 +296,8 @@ template <class Law, bool kUpdate, bool kStats>
       const Real ri = r[i], rj = r[j];
       const Real rsum = ri + rj;
       const bool touch = d.squaredNorm() < rsum * rsum;
+      __builtin_prefetch(v + j);
+      __builtin_prefetch(w + j);
       batch.i[q] = i;
       batch.j[q] = j;
       batch.entry[q] = k;
@@ -315,6 +315,11 @@ template <class Law, bool kUpdate, bool kStats>
     // entry, the data is still in L1).
     for (int c = batch.count; c < q; ++c) {
       const Index i = batch.i[c], j = batch.j[c];
+      {
+        const Real* h = hist + static_cast<std::size_t>(batch.entry[c]) * S;
+        __builtin_prefetch(h, 1);
+        __builtin_prefetch(h + S - 1, 1);
+      }
       const Vec3 d = x[i] - x[j];
       const Real ri = r[i], rj = r[j];
       batch.ri[c] = ri;
@@ -335,9 +340,7 @@ template <class Law, bool kUpdate, bool kStats>
       batch.wjy[c] = w[j][1];
       batch.wjz[c] = w[j][2];
       batch.inv_mass_sum[c] = im[i] + im[j];
-      if constexpr (Law::kRolling) {
-        batch.rolling[0][c] = irl[i] + irl[j];
-      }
+      if constexpr (Law::kRollingInertia) batch.rolling[0][c] = irl[i] + irl[j];
     }
     batch.count = q;
     k0 = k1;

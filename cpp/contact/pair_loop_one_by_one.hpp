@@ -67,8 +67,8 @@ template <class Law, bool kUpdate, bool kStats>
       ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
       if constexpr (Law::kRolling) {
         c.w_rel = wi - w[j];
-        c.rolling_inertia = 1 / (irl[i] + irl[j]);
       }
+      if constexpr (Law::kRollingInertia) c.rolling_inertia = 1 / (irl[i] + irl[j]);
       ContactOutput out;
       if constexpr (kUpdate) {
         list.touching[k] = 1;

@@ -40,6 +40,7 @@ struct NoRolling {
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = false;
   static constexpr bool kSpring = false;
+  static constexpr bool kInertia = false;  // reads ContactLanes::rolling_inertia
   template <class T>
   [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>&,
                                                     const RollingContext<T>&,
@@ -58,6 +59,7 @@ struct CDTRolling {
   static constexpr int kHistorySize = 0;
   static constexpr bool kActive = true;
   static constexpr bool kSpring = false;
+  static constexpr bool kInertia = false;
   template <class T>
   [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>& p,
                                                     const RollingContext<T>& k,
@@ -76,7 +78,8 @@ struct SpringDashpotRolling {
   static constexpr const char* kName = kEPSD2 ? "epsd2" : "epsd";
   static constexpr int kHistorySize = 3;  // spring torque M_k (3-vector)
   static constexpr bool kActive = true;
-  static constexpr bool kSpring = true;  // the history is a tangent-plane vector
+  static constexpr bool kSpring = true;      // the history is a tangent-plane vector
+  static constexpr bool kInertia = !kEPSD2;  // the damping
   template <class T>
   [[gnu::always_inline]] static LaneVec<T> evaluate(const Param<RollingPair, T>& p,
                                                     const RollingContext<T>& k,
