@@ -286,20 +286,27 @@ template <class Law, bool kUpdate, bool kStats>
     for (; last < n && first[last] < k1; ++last)
       owner[std::max<Index>(first[last], k0) - k0] = last;
     for (Index k = k0 + 1; k < k1; ++k) owner[k - k0] = std::max(owner[k - k0], owner[k - k0 - 1]);
-    // The overlap test without a branch per entry (touching or not is unpredictable in a
-    // bed): every entry is written to the next free slot, which only a touching one keeps.
-    int q = batch.count;
+    // The overlap test of every entry of the chunk. Nothing carries from one entry to the next,
+    // so the loads of many entries are in flight at once (with the slot count below in the
+    // same loop, every store waited for the test of the entry before).
+    std::uint8_t touches[Batch::kCapacity];
     for (Index k = k0; k < k1; ++k) {
       const Index i = owner[k - k0];
       const Index j = partner[k];
       const Vec3 d = x[i] - x[j];
       const Real ri = r[i], rj = r[j];
       const Real rsum = ri + rj;
-      const bool touch = d.squaredNorm() < rsum * rsum;
+      touches[k - k0] = d.squaredNorm() < rsum * rsum;
       __builtin_prefetch(v + j);
       __builtin_prefetch(w + j);
-      batch.i[q] = i;
-      batch.j[q] = j;
+    }
+    // Without a branch per entry (touching or not is unpredictable in a bed): every entry is
+    // written to the next free slot, which only a touching one keeps.
+    int q = batch.count;
+    for (Index k = k0; k < k1; ++k) {
+      const bool touch = touches[k - k0];
+      batch.i[q] = owner[k - k0];
+      batch.j[q] = partner[k];
       batch.entry[q] = k;
       // A contact that opens or closes (rare, hence predictable): a closed one forgets its
       // history, as a new contact starts from zero.
