@@ -53,7 +53,8 @@ struct PairBatch {
   alignas(64) Column fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz;
   alignas(64) Real rolling_torque[kRolling ? 3 : 0][kCapacity];
   alignas(64) Column overlap, nx, ny, nz;  // for the statistics
-  Index i[kCapacity], j[kCapacity], entry[kCapacity];
+  // (16 more: pass 1 may write a whole vector of slots from the last one on)
+  Index i[kCapacity + 16], j[kCapacity + 16], entry[kCapacity + 16];
   int pair[kCapacity];
   int count = 0;
 
@@ -109,6 +110,52 @@ struct RowSum {
   to[0] += s.xy[0];
   to[1] += s.xy[1];
   to[2] += s.z;
+}
+
+// Pass 1's slots for the entries [k0, k1): entry k goes to slot q (its row owner[k - k0], its
+// partner, k), and q moves on where touches[k - k0] is set; returns the new q. A contact that
+// opens or closes (touching[k] differs) goes to on_change(k, touch) first. Without a branch per
+// entry: touching or not is unpredictable in a bed. With AVX-512, 16 entries at a time, the
+// kept ones packed by vpcompressd (the slots after q may then hold others' values, unused).
+template <class Batch, class OnChange>
+[[gnu::always_inline]] inline int fill_slots(Batch& batch, int q, Index k0, Index k1,
+                                             const Index* owner, const Index* partner,
+                                             const std::uint8_t* touches,
+                                             const std::uint8_t* touching, OnChange on_change) {
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+  static_assert(sizeof(Index) == 4);
+  const __m512i iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+  for (Index k = k0; k < k1; k += 16) {
+    const auto valid = static_cast<__mmask16>((1u << std::min<Index>(16, k1 - k)) - 1);
+    const std::uint8_t* t = touches + (k - k0);
+    const __m128i now = _mm_maskz_loadu_epi8(valid, t);
+    const __m128i was = _mm_maskz_loadu_epi8(valid, touching + k);
+    // A contact that opens or closes is rare: this loop seldom runs.
+    for (unsigned c = _mm_cmpneq_epi8_mask(was, now); c != 0; c &= c - 1) {
+      const int l = __builtin_ctz(c);
+      on_change(k + l, t[l] != 0);
+    }
+    const __mmask16 keep = _mm_test_epi8_mask(now, now);
+    const __m512i rows = _mm512_maskz_loadu_epi32(valid, owner + (k - k0));
+    const __m512i partners = _mm512_maskz_loadu_epi32(valid, partner + k);
+    const __m512i entries = _mm512_add_epi32(_mm512_set1_epi32(k), iota);
+    _mm512_storeu_si512(batch.i + q, _mm512_maskz_compress_epi32(keep, rows));
+    _mm512_storeu_si512(batch.j + q, _mm512_maskz_compress_epi32(keep, partners));
+    _mm512_storeu_si512(batch.entry + q, _mm512_maskz_compress_epi32(keep, entries));
+    q += __builtin_popcount(keep);
+  }
+#else
+  // Every entry is written to the next free slot, which only a touching one keeps.
+  for (Index k = k0; k < k1; ++k) {
+    const bool touch = touches[k - k0];
+    batch.i[q] = owner[k - k0];
+    batch.j[q] = partner[k];
+    batch.entry[q] = k;
+    if (touching[k] != touch) on_change(k, touch);  // rare, hence predictable
+    q += touch;
+  }
+#endif
+  return q;
 }
 
 // Pass 2 on lanes [b, b + kPackLanes) of the batch.
@@ -300,24 +347,17 @@ template <class Law, bool kUpdate, bool kStats>
       __builtin_prefetch(v + j);
       __builtin_prefetch(w + j);
     }
-    // Without a branch per entry (touching or not is unpredictable in a bed): every entry is
-    // written to the next free slot, which only a touching one keeps.
-    int q = batch.count;
-    for (Index k = k0; k < k1; ++k) {
-      const bool touch = touches[k - k0];
-      batch.i[q] = owner[k - k0];
-      batch.j[q] = partner[k];
-      batch.entry[q] = k;
-      // A contact that opens or closes (rare, hence predictable): a closed one forgets its
-      // history, as a new contact starts from zero.
-      if (kUpdate && touching[k] != touch) {
-        if (!touch)
-          std::fill(hist + static_cast<std::size_t>(k) * S,
-                    hist + static_cast<std::size_t>(k + 1) * S, Real(0));
-        touching[k] = touch;
-      }
-      q += touch;
-    }
+    // The slots. A contact that opens or closes: a closed one forgets its history, as a new
+    // contact starts from zero (set-up evaluations change neither).
+    const int q = detail::fill_slots(
+        batch, batch.count, k0, k1, owner, partner, touches, touching, [&](Index k, bool touch) {
+          if constexpr (kUpdate) {
+            if (!touch)
+              std::fill(hist + static_cast<std::size_t>(k) * S,
+                        hist + static_cast<std::size_t>(k + 1) * S, Real(0));
+            touching[k] = touch;
+          }
+        });
     // Each touching contact's inputs (the geometry again: cheaper than storing it for every
     // entry, the data is still in L1).
     for (int c = batch.count; c < q; ++c) {
