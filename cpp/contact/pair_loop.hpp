@@ -5,11 +5,12 @@
 // Three passes over batches of up to kBatch touching contacts (core/simd_pack.hpp):
 //   1. scan the list in order, in chunks of entries that cannot overflow the batch and without
 //      a loop per row (rows hold two or three entries: the exit of a loop per row mispredicts
-//      at nearly every row): the overlap test per entry, without branches in a bed (a contact
-//      that closes forgets its history), then each touching contact's inputs gathered into the
-//      batch, one array per quantity (the accesses to particle j happen here); the velocities
-//      of j and the touching contacts' histories are prefetched on the way, as the hardware
-//      cannot guess either address (bench_pair_loop: 5-20 % per law);
+//      at nearly every row): the overlap tests of a chunk, then its slots without branches in
+//      a bed (fill_slots; a contact that closes forgets its history), then each touching
+//      contact's inputs gathered into the batch, one array per quantity (the accesses to
+//      particle j happen here); the velocities of j and the touching contacts' histories are
+//      prefetched on the way, as the hardware cannot guess either address (bench_pair_loop:
+//      5-20 % per law);
 //   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
 //      square roots of kPackLanes contacts in one instruction each; the histories in and out of
 //      columns by core/lane_columns.hpp;
