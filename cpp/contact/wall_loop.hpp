@@ -281,10 +281,8 @@ void accumulate_wall_forces(const Law& law, ParticleStore& ps, std::vector<Wall>
           ps.velocity[i] - ai * ps.angular_velocity[i].cross(nrm) - wall.surface_velocity(g.point);
       Vec3 w_rel = Vec3::Zero();
       Real rolling_inertia = 0;
-      if constexpr (Law::kRolling) {
-        w_rel = ps.angular_velocity[i] - wall.angular_velocity;
-        rolling_inertia = 1 / ps.inv_rolling_inertia[i];
-      }
+      if constexpr (Law::kRolling) w_rel = ps.angular_velocity[i] - wall.angular_velocity;
+      if constexpr (Law::kRollingInertia) rolling_inertia = 1 / ps.inv_rolling_inertia[i];
       batch.nx[q] = nrm[0];
       batch.ny[q] = nrm[1];
       batch.nz[q] = nrm[2];
