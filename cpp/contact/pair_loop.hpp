@@ -8,9 +8,9 @@
 //      at nearly every row): the overlap tests of a chunk, then its slots without branches in
 //      a bed (fill_slots; a contact that closes forgets its history), then each touching
 //      contact's inputs gathered into the batch, one array per quantity (the accesses to
-//      particle j happen here); the velocities of j and the touching contacts' histories are
-//      prefetched on the way, as the hardware cannot guess either address (bench_pair_loop:
-//      5-20 % per law);
+//      particle j happen here); the velocities, masses (and, for EPSD, rolling inertias) of j
+//      and the touching contacts' histories are prefetched on the way, as the hardware cannot
+//      guess either address (bench_pair_loop: 5-20 % per law);
 //   2. evaluate the law on packs of kPackLanes contacts: plain vector loads, the divisions and
 //      square roots of kPackLanes contacts in one instruction each; the histories in and out of
 //      columns by core/lane_columns.hpp;
@@ -347,6 +347,8 @@ template <class Law, bool kUpdate, bool kStats>
       touches[k - k0] = d.squaredNorm() < rsum * rsum;
       __builtin_prefetch(v + j);
       __builtin_prefetch(w + j);
+      __builtin_prefetch(im + j);
+      if constexpr (Law::kRollingInertia) __builtin_prefetch(irl + j);
     }
     // The slots. A contact that opens or closes: a closed one forgets its history, as a new
     // contact starts from zero (set-up evaluations change neither).

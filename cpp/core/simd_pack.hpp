@@ -110,12 +110,19 @@ template <>
 [[gnu::always_inline]] inline PackMask mask_or(PackMask a, PackMask b) { return a | b; }
 [[gnu::always_inline]] inline PackMask mask_not(PackMask a) { return ~a; }
 [[gnu::always_inline]] inline Real lane(Pack x, int l) { return x[l]; }
+// Out of line: a call clobbers every vector register, and with the calls inlined into the law
+// GCC kept the law's values on the stack for the whole pack, the common path too (EEPA laws:
+// several hundred stack accesses per pack).
 template <class F, class... A>
-[[gnu::always_inline]] inline Pack per_lane(PackMask m, F f, Pack a, A... rest) {
+[[gnu::noinline, gnu::cold]] Pack per_lane_out_of_line(PackMask m, F f, Pack a, A... rest) {
   Pack r = splat<Pack>(0);
   for (int l = 0; l < kPackLanes; ++l)
     if (m[l]) r[l] = f(a[l], rest[l]...);
   return r;
+}
+template <class F, class... A>
+[[gnu::always_inline]] inline Pack per_lane(PackMask m, F f, Pack a, A... rest) {
+  return per_lane_out_of_line(m, f, a, rest...);
 }
 #endif
 
