@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #include <type_traits>
 
 #include "contact/contact_input.hpp"
@@ -316,24 +317,17 @@ template <class Law, bool kUpdate, bool kStats>
 
   std::uint8_t* touching = list.touching.data();
   const bool one_material = law.single_material();
-  const Index* first = list.first.data();
-  const Index total = first[n];
+  const Index total = list.first[n];
+  if (list.owner.size() != static_cast<std::size_t>(total))
+    throw std::logic_error("accumulate_pair_forces: the contact list's rows are not indexed");
   // Pass 1 runs over the list in chunks that cannot overflow the batch, one entry at a time
   // without a loop per row: rows hold two or three entries, and a loop per row would
-  // mispredict its exit at nearly every row. owner[k - k0] is the row of entry k.
-  Index owner[Batch::kCapacity];
-  Index row = 0;  // the row of entry k0
+  // mispredict its exit at nearly every row. owner[k - k0] is the row of entry k (the list's
+  // index, made at the build).
   for (Index k0 = 0; k0 < total;) {
     if (Batch::kCapacity - batch.count < kMinChunk) flush();
     const Index k1 = std::min<Index>(total, k0 + (Batch::kCapacity - batch.count));
-    while (first[row + 1] <= k0) ++row;
-    // The row of each entry: the last row starting at or before it (rows without entries
-    // start where the next one does and are overwritten by it), by a running maximum.
-    std::fill(owner, owner + (k1 - k0), Index(-1));
-    Index last = row;
-    for (; last < n && first[last] < k1; ++last)
-      owner[std::max<Index>(first[last], k0) - k0] = last;
-    for (Index k = k0 + 1; k < k1; ++k) owner[k - k0] = std::max(owner[k - k0], owner[k - k0 - 1]);
+    const Index* owner = list.owner.data() + k0;
     // The overlap test of every entry of the chunk. Nothing carries from one entry to the next,
     // so the loads of many entries are in flight at once (with the slot count below in the
     // same loop, every store waited for the test of the entry before).

@@ -76,6 +76,7 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff,
   for (const auto& [owner, partner] : found) list.partner[count[owner]++] = partner;
   list.history.assign(list.partner.size() * list.history_stride, 0.0);
   list.touching.assign(list.partner.size(), 0);
+  index_rows(list);
 }
 
 void index_rows(ContactList& list) {
@@ -88,6 +89,17 @@ void index_rows(ContactList& list) {
     n_rows += list.first[i + 1] != list.first[i];
   }
   list.rows.resize(n_rows);
+  // Each row's number at its first entry (a row without entries starts where the next one
+  // does and is overwritten by it), then a running maximum. Offsets are clamped: a list read
+  // from a file is checked elsewhere, and this must not write outside it either way.
+  const Index size = static_cast<Index>(list.partner.size());
+  list.owner.assign(list.partner.size(), 0);
+  Index* owner = list.owner.data();
+  for (Index i = 0; i < n; ++i) {
+    const Index k = std::clamp<Index>(list.first[i], 0, size);
+    if (k < size) owner[k] = i;
+  }
+  for (Index k = 1; k < size; ++k) owner[k] = std::max(owner[k], owner[k - 1]);
 }
 
 void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,

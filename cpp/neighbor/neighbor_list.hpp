@@ -34,11 +34,14 @@ struct ContactList {
   // The owned particles that have entries, ascending (index_rows). The wall loop walks only
   // these: near walls they are a thin, scattered subset.
   PageVector<Index> rows;
+  // The row (owned particle) of every entry (index_rows): the pair loop reads it in order
+  // instead of working it out from `first` for every chunk.
+  PageVector<Index> owner;
 
   std::size_t size() const { return partner.size(); }
 };
 
-// Fills list.rows from list.first: after a build and after a list is loaded.
+// Fills list.rows and list.owner from list.first: after a build and after a list is loaded.
 void index_rows(ContactList& list);
 
 // Builds the particle half list from a grid binned over all local (owned + ghost) particles.

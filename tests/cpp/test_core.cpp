@@ -218,12 +218,14 @@ void test_pair_list_brute() {
                   list.first[n] == static_cast<Index>(list.size()),
               tag + ": malformed CSR offsets");
         CHECK(list.history.size() == 3 * list.size(), tag + ": history size");
+        CHECK(list.owner.size() == list.size(), tag + ": owner size");
         PairSet got;
-        bool oriented = true, sorted_offsets = true;
+        bool oriented = true, sorted_offsets = true, owned = true;
         std::size_t duplicates = 0;
         for (Index i = 0; i < n; ++i) {
           sorted_offsets = sorted_offsets && list.first[i] <= list.first[i + 1];
           for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+            owned = owned && list.owner[k] == i;
             const Index j = list.partner[k];
             oriented = oriented && ps.id[i] < ps.id[j];
             if (!got.insert({std::min(ps.id[i], ps.id[j]), std::max(ps.id[i], ps.id[j])}).second)
@@ -231,6 +233,7 @@ void test_pair_list_brute() {
           }
         }
         CHECK(sorted_offsets, tag + ": offsets not monotonic");
+        CHECK(owned, tag + ": an entry's owner is not its row");
         CHECK(oriented, tag + ": an entry is not stored at the particle with the smaller id");
         CHECK(duplicates == 0, tag + ": " + std::to_string(duplicates) + " duplicate entries");
         std::size_t missing = 0, extra = 0;
