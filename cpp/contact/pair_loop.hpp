@@ -114,7 +114,7 @@ struct RowSum {
   to[2] += s.z;
 }
 
-// Pass 1's slots for the entries [k0, k1): entry k goes to slot q (its row owner[k - k0], its
+// Pass 1's slots for the entries [k0, k1): entry k goes to slot q (its row owner[k], its
 // partner, k), and q moves on where touches[k - k0] is set; returns the new q. A contact that
 // opens or closes (touching[k] differs) goes to on_change(k, touch) first. Without a branch per
 // entry: touching or not is unpredictable in a bed. With AVX-512, 16 entries at a time, the
@@ -138,7 +138,7 @@ template <class Batch, class OnChange>
       on_change(k + l, t[l] != 0);
     }
     const __mmask16 keep = _mm_test_epi8_mask(now, now);
-    const __m512i rows = _mm512_maskz_loadu_epi32(valid, owner + (k - k0));
+    const __m512i rows = _mm512_maskz_loadu_epi32(valid, owner + k);
     const __m512i partners = _mm512_maskz_loadu_epi32(valid, partner + k);
     const __m512i entries = _mm512_add_epi32(_mm512_set1_epi32(k), iota);
     _mm512_storeu_si512(batch.i + q, _mm512_maskz_compress_epi32(keep, rows));
@@ -150,7 +150,7 @@ template <class Batch, class OnChange>
   // Every entry is written to the next free slot, which only a touching one keeps.
   for (Index k = k0; k < k1; ++k) {
     const bool touch = touches[k - k0];
-    batch.i[q] = owner[k - k0];
+    batch.i[q] = owner[k];
     batch.j[q] = partner[k];
     batch.entry[q] = k;
     if (touching[k] != touch) on_change(k, touch);  // rare, hence predictable
@@ -318,22 +318,22 @@ template <class Law, bool kUpdate, bool kStats>
   std::uint8_t* touching = list.touching.data();
   const bool one_material = law.single_material();
   const Index total = list.first[n];
+  const Index* owner = list.owner.data();
   if (list.owner.size() != static_cast<std::size_t>(total))
     throw std::logic_error("accumulate_pair_forces: the contact list's rows are not indexed");
   // Pass 1 runs over the list in chunks that cannot overflow the batch, one entry at a time
   // without a loop per row: rows hold two or three entries, and a loop per row would
-  // mispredict its exit at nearly every row. owner[k - k0] is the row of entry k (the list's
+  // mispredict its exit at nearly every row. owner[k] is the row of entry k (the list's
   // index, made at the build).
   for (Index k0 = 0; k0 < total;) {
     if (Batch::kCapacity - batch.count < kMinChunk) flush();
     const Index k1 = std::min<Index>(total, k0 + (Batch::kCapacity - batch.count));
-    const Index* owner = list.owner.data() + k0;
     // The overlap test of every entry of the chunk. Nothing carries from one entry to the next,
     // so the loads of many entries are in flight at once (with the slot count below in the
     // same loop, every store waited for the test of the entry before).
     std::uint8_t touches[Batch::kCapacity];
     for (Index k = k0; k < k1; ++k) {
-      const Index i = owner[k - k0];
+      const Index i = owner[k];
       const Index j = partner[k];
       const Vec3 d = x[i] - x[j];
       const Real ri = r[i], rj = r[j];
