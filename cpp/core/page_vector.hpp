@@ -63,4 +63,23 @@ struct PageAllocator {
 template <class T>
 using PageVector = std::vector<T, PageAllocator<T>>;
 
+// Room for n elements and some to grow. resize() and assign() of a cleared vector map exactly
+// n, so a contact list that gains a few entries at every rebuild (a compacting bed) was mapped
+// afresh each time, its pages faulted in and cleared by the kernel again: about 1000 page faults
+// per rebuild in the dense 50k bed. The headroom's pages are not resident until written.
+// reserve_growing drops the contents when it has to grow.
+template <class T>
+void reserve_growing(PageVector<T>& v, std::size_t n) {
+  if (n > v.capacity()) {
+    PageVector<T>().swap(v);  // the old buffer goes first: never two at once
+    v.reserve(n + n / 8);
+  }
+}
+// v = n copies of value, with room to grow.
+template <class T>
+void assign_growing(PageVector<T>& v, std::size_t n, const T& value) {
+  reserve_growing(v, n);
+  v.assign(n, value);
+}
+
 }  // namespace grainscale

@@ -72,10 +72,12 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff,
     count[i] = list.first[i];  // becomes the fill position
   }
   list.first[n] = offset;
+  list.partner.clear();
+  reserve_growing(list.partner, static_cast<std::size_t>(offset));
   list.partner.resize(offset);
   for (const auto& [owner, partner] : found) list.partner[count[owner]++] = partner;
-  list.history.assign(list.partner.size() * list.history_stride, 0.0);
-  list.touching.assign(list.partner.size(), 0);
+  assign_growing(list.history, list.partner.size() * list.history_stride, 0.0);
+  assign_growing<std::uint8_t>(list.touching, list.partner.size(), 0);
   index_rows(list);
 }
 
@@ -93,7 +95,7 @@ void index_rows(ContactList& list) {
   // does and is overwritten by it), then a running maximum. Offsets are clamped: a list read
   // from a file is checked elsewhere, and this must not write outside it either way.
   const Index size = static_cast<Index>(list.partner.size());
-  list.owner.assign(list.partner.size(), 0);
+  assign_growing<Index>(list.owner, list.partner.size(), 0);
   Index* owner = list.owner.data();
   for (Index i = 0; i < n; ++i) {
     const Index k = std::clamp<Index>(list.first[i], 0, size);
@@ -127,8 +129,8 @@ void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
     }
   }
   list.first[n] = static_cast<Index>(list.partner.size());
-  list.history.assign(list.partner.size() * list.history_stride, 0.0);
-  list.touching.assign(list.partner.size(), 0);
+  assign_growing(list.history, list.partner.size() * list.history_stride, 0.0);
+  assign_growing<std::uint8_t>(list.touching, list.partner.size(), 0);
   index_rows(list);
 }
 
