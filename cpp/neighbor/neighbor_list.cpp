@@ -72,7 +72,7 @@ void build_pair_list(const ParticleStore& ps, const CellGrid& grid, Real cutoff,
     count[i] = list.first[i];  // becomes the fill position
   }
   list.first[n] = offset;
-  list.partner.clear();
+  // Every slot is written below: the old contents need neither keeping nor clearing.
   reserve_growing(list.partner, static_cast<std::size_t>(offset));
   list.partner.resize(offset);
   for (const auto& [owner, partner] : found) list.partner[count[owner]++] = partner;
