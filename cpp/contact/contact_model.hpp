@@ -112,12 +112,17 @@ class ContactModel {
     const NormalState<T> ns = Normal::evaluate(p.sub(&Pair::normal), c, history);
     const T damping = p.get(&Pair::damping);
     const T vn = dot(c.v_rel, c.normal);
-    T fn = ns.spring - damping * sqrt_lanes(ns.damping_stiffness * c.m_eff) * vn;
+    const T gn = damping * sqrt_lanes(ns.damping_stiffness * c.m_eff);
+    T fn = ns.spring - gn * vn;
     if (settings_.limit_force) fn = select(fn < 0.0, splat<T>(0), fn);
     const LaneVec<T> vt = c.v_rel - vn * c.normal;
-    const T gt = settings_.tangential_damping
-                     ? damping * sqrt_lanes(ns.tangential_stiffness * c.m_eff)
-                     : splat<T>(0);
+    T gt = splat<T>(0);
+    if (settings_.tangential_damping) {
+      if constexpr (Normal::kFixedTangentialRatio)
+        gt = gn * ns.tangential_root_ratio;  // = damping sqrt(k_t m*)
+      else
+        gt = damping * sqrt_lanes(ns.tangential_stiffness * c.m_eff);
+    }
     const T fn_plus = select(fn < 0.0, splat<T>(0), fn);  // std::max(fn, 0)
     const LaneVec<T> ft =
         MindlinTangential::evaluate(settings_.history, ns.tangential_stiffness, gt,

@@ -41,16 +41,22 @@ struct NormalState {
   T stiffness;             // k_n used by rolling models (EPSD)
   T damping_stiffness;     // stiffness the normal dashpot is built on
   T tangential_stiffness;  // k_t
+  // sqrt(k_t / damping_stiffness), for models where it is a constant of the pair
+  // (kFixedTangentialRatio): the tangential dashpot then costs no square root of its own.
+  T tangential_root_ratio;
 };
 
 struct HertzNormal {
   static constexpr const char* kName = "hertz";
   static constexpr int kHistorySize = 0;
+  static constexpr bool kFixedTangentialRatio = true;  // k_t / S_n = 8 G* / (2 E*)
   struct Pair {
     Real effective_youngs, effective_shear;
+    Real tangential_root_ratio;  // sqrt(4 G* / E*)
   };
   static Pair make_pair(const PairModuli& m, const Interaction&) {
-    return {m.effective_youngs, m.effective_shear};
+    return {m.effective_youngs, m.effective_shear,
+            std::sqrt(4.0 * m.effective_shear / m.effective_youngs)};
   }
   template <class T>
   [[gnu::always_inline]] static NormalState<T> evaluate(const Param<Pair, T>& p,
@@ -59,7 +65,7 @@ struct HertzNormal {
     const T sqrt_rd = sqrt_lanes(c.r_eff * c.overlap);
     const T kn = (4.0 / 3.0) * youngs * sqrt_rd;
     return {kn * c.overlap, kn, 2.0 * youngs * sqrt_rd,
-            8.0 * p.get(&Pair::effective_shear) * sqrt_rd};
+            8.0 * p.get(&Pair::effective_shear) * sqrt_rd, p.get(&Pair::tangential_root_ratio)};
   }
 };
 
@@ -68,6 +74,7 @@ struct LinearNormal {
   // The derived k_n (a power per evaluation) is constant over a contact (R*, m* are): it is
   // computed when the contact starts and kept in the history.
   static constexpr int kHistorySize = 1;
+  static constexpr bool kFixedTangentialRatio = false;  // k_t given, k_n derived per contact
   struct Pair {
     Real normal_stiffness;      // > 0: given; else derived per contact
     Real tangential_ratio;      // k_t / k_n when k_t is not given
@@ -101,25 +108,29 @@ struct LinearNormal {
     const T kn = select(is_given, given, derived);
     const T kt_given = p.get(&Pair::tangential_stiffness);
     const T kt = select(kt_given > 0, kt_given, p.get(&Pair::tangential_ratio) * kn);
-    return {kn * c.overlap, kn, kn, kt};
+    return {kn * c.overlap, kn, kn, kt, splat<T>(0)};
   }
 };
 
 struct EEPANormal {
   static constexpr const char* kName = "eepa";
-  static constexpr int kHistorySize = 1;  // d_max (scalar)
+  static constexpr int kHistorySize = 1;               // d_max (scalar)
+  static constexpr bool kFixedTangentialRatio = true;  // k_t / k = 2/7
   struct Pair {
     Real exponent;            // n
     Real loading_stiffness;   // k1 (> 0 given; else derived per contact)
     Real unloading_ratio;     // k2 / k1 >= 1
+    Real plastic_fraction;    // 1 - k1 / k2, of the pair (not a division per contact)
     Real adhesive_stiffness;  // k_adh
     Real pull_off_force;      // f0
     Real adhesion_exponent;   // chi
     Real effective_youngs;
   };
   static Pair make_pair(const PairModuli& m, const Interaction& in) {
-    return {in.eepa_exponent,  in.loading_stiffness, in.unloading_ratio, in.adhesive_stiffness,
-            in.pull_off_force, in.adhesion_exponent, m.effective_youngs};
+    return {in.eepa_exponent,      in.loading_stiffness,
+            in.unloading_ratio,    1.0 - 1.0 / in.unloading_ratio,
+            in.adhesive_stiffness, in.pull_off_force,
+            in.adhesion_exponent,  m.effective_youngs};
   }
   // x^n (x >= 0): exact forms for n = 1, 1.5 and 0.5 (n - 1 of the common n = 1.5, in the
   // stiffness: per-lane std::pow there made EEPA with n = 1.5 cost 1.6-1.8 x Hertz-Mindlin per
@@ -157,7 +168,7 @@ struct EEPANormal {
     const T f_load = k1 * dn;
     // Virgin loading is decided on the overlap, not on rounded branch forces.
     const auto loading = d >= d_max;
-    const T dpn = (1.0 - k1 / k2) * power(d_max, n);
+    const T dpn = p.get(&Pair::plastic_fraction) * power(d_max, n);
     const T f_unload = k2 * (dn - dpn);
     const T f_adh = -p.get(&Pair::adhesive_stiffness) * power(d, p.get(&Pair::adhesion_exponent));
     T f = select(f_unload >= f_load, f_load, select(f_unload > f_adh, f_unload, f_adh));
@@ -165,7 +176,9 @@ struct EEPANormal {
     history[0] = select(loading, d, d_max);
     T k_load = k1;
     if (!all(linear)) k_load = select(linear, k1, n * k1 * power(d, n - 1.0));
-    return {p.get(&Pair::pull_off_force) + f, k_load, k_load, (2.0 / 7.0) * k_load};
+    constexpr Real kRootTwoSevenths = 0.53452248382484876937;  // sqrt(2/7)
+    return {p.get(&Pair::pull_off_force) + f, k_load, k_load, (2.0 / 7.0) * k_load,
+            splat<T>(kRootTwoSevenths)};
   }
 };
 

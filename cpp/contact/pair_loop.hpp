@@ -173,11 +173,14 @@ template <class Law, bool kUpdate, class Batch>
   const T ri = load_lanes<T>(batch.ri + b), rj = load_lanes<T>(batch.rj + b);
   const T dist = sqrt_lanes(squared_norm(d));
   const T overlap = rsum - dist;
-  // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
-  const auto apart = dist > 0.0;
-  const LaneVec<T> nrm{select(apart, d.x / dist, splat<T>(0)),
-                       select(apart, d.y / dist, splat<T>(0)),
-                       select(apart, d.z / dist, splat<T>(1))};
+  const T inv_mass_sum = load_lanes<T>(batch.inv_mass_sum + b);
+  PairMeans<T> means;
+  if constexpr (Law::kRollingInertia)
+    means =
+        pair_means<true>(d, dist, ri, rj, rsum, inv_mass_sum, load_lanes<T>(batch.rolling[0] + b));
+  else
+    means = pair_means<false>(d, dist, ri, rj, rsum, inv_mass_sum);
+  const LaneVec<T>& nrm = means.normal;
   const T ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
   const LaneVec<T> wi{load_lanes<T>(batch.wix + b), load_lanes<T>(batch.wiy + b),
                       load_lanes<T>(batch.wiz + b)};
@@ -187,8 +190,8 @@ template <class Law, bool kUpdate, class Batch>
                       load_lanes<T>(batch.dvz + b)};
   ContactLanes<T> c{nrm,
                     overlap,
-                    ri * rj / rsum,
-                    1.0 / load_lanes<T>(batch.inv_mass_sum + b),
+                    means.r_eff,
+                    means.m_eff,
                     dv - cross(ai * wi + aj * wj, nrm),
                     dt,
                     LaneVec<T>::zero(),
@@ -196,7 +199,7 @@ template <class Law, bool kUpdate, class Batch>
   if constexpr (Law::kRolling) {
     c.w_rel = wi - wj;  // the subtraction a scalar loop does, lane by lane
   }
-  if constexpr (Law::kRollingInertia) c.rolling_inertia = 1.0 / load_lanes<T>(batch.rolling[0] + b);
+  if constexpr (Law::kRollingInertia) c.rolling_inertia = means.rolling_inertia;
   // The history of each lane, as one value per lane and history slot.
   const typename Law::Pair* pairs[W];
   std::size_t at[W];  // where each lane's history starts

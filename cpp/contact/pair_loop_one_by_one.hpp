@@ -60,15 +60,18 @@ template <class Law, bool kUpdate, bool kStats>
       }
       const Real dist = std::sqrt(d2);
       const Real overlap = rsum - dist;
-      // Coincident centres have no normal; pick +z so that they are pushed apart, not NaN.
-      const Vec3 nrm = dist > 0 ? Vec3(d / dist) : Vec3(Vec3::UnitZ());
+      const PairMeans<Real> means =
+          Law::kRollingInertia
+              ? pair_means<true>(from_eigen(d), dist, ri, rj, rsum, imi + im[j], irl[i] + irl[j])
+              : pair_means<false>(from_eigen(d), dist, ri, rj, rsum, imi + im[j]);
+      const Vec3 nrm = to_eigen(means.normal);
       const Real ai = ri - 0.5 * overlap, aj = rj - 0.5 * overlap;
       const Vec3 vrel = vi - v[j] - (ai * wi + aj * w[j]).cross(nrm);
-      ContactInput c{nrm, overlap, ri * rj / rsum, 1 / (imi + im[j]), vrel, dt};
+      ContactInput c{nrm, overlap, means.r_eff, means.m_eff, vrel, dt};
       if constexpr (Law::kRolling) {
         c.w_rel = wi - w[j];
       }
-      if constexpr (Law::kRollingInertia) c.rolling_inertia = 1 / (irl[i] + irl[j]);
+      if constexpr (Law::kRollingInertia) c.rolling_inertia = means.rolling_inertia;
       ContactOutput out;
       if constexpr (kUpdate) {
         list.touching[k] = 1;

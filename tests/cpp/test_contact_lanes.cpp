@@ -227,15 +227,21 @@ void reference_pair_forces(const Law& law, gs::ParticleStore& ps, gs::ContactLis
         continue;
       }
       const Real dist = std::sqrt(d2), overlap = rsum - dist;
-      const Vec3 n = d / dist;
+      // n, R*, m* and I_r as both pair loops compute them (one reciprocal for the means)
+      const gs::PairMeans<Real> means = gs::pair_means<true>(
+          gs::from_eigen(d), dist, ps.radius[i], ps.radius[j], rsum,
+          ps.inv_mass[i] + ps.inv_mass[j], ps.inv_rolling_inertia[i] + ps.inv_rolling_inertia[j]);
+      const gs::PairMeans<Real> means_no_inertia =
+          gs::pair_means<false>(gs::from_eigen(d), dist, ps.radius[i], ps.radius[j], rsum,
+                                ps.inv_mass[i] + ps.inv_mass[j]);
+      const gs::PairMeans<Real>& m = Law::kRollingInertia ? means : means_no_inertia;
+      const Vec3 n = gs::to_eigen(m.normal);
       const Real ai = ps.radius[i] - 0.5 * overlap, aj = ps.radius[j] - 0.5 * overlap;
       const Vec3 vrel = ps.velocity[i] - ps.velocity[j] -
                         (ai * ps.angular_velocity[i] + aj * ps.angular_velocity[j]).cross(n);
-      gs::ContactInput c{
-          n,    overlap, ps.radius[i] * ps.radius[j] / rsum, 1 / (ps.inv_mass[i] + ps.inv_mass[j]),
-          vrel, dt};
+      gs::ContactInput c{n, overlap, m.r_eff, m.m_eff, vrel, dt};
       c.w_rel = ps.angular_velocity[i] - ps.angular_velocity[j];
-      c.rolling_inertia = 1 / (ps.inv_rolling_inertia[i] + ps.inv_rolling_inertia[j]);
+      c.rolling_inertia = m.rolling_inertia;
       list.touching[k] = 1;
       const gs::ContactOutput out = law.force(law.pair(ps.material[i], ps.material[j]), c, h);
       const Vec3 nxf = n.cross(out.force);

@@ -446,7 +446,10 @@ def test_rest_in_corner_of_closed_mesh_box():
     assert np.allclose(np.abs(c["normal"]).sum(axis=1), 1.0, atol=1e-9) and np.allclose(
         np.abs(c["normal"]).sum(axis=0), 1.0, atol=1e-9
     ), f"contact normals {normals} are not the three face normals"
-    assert np.ptp(c["overlap"]) <= 1e-9 * c["overlap"].max(), (
+    # With friction the rest state depends on the path (the springs stick where they are), so
+    # the faces' rounding differences survive: 0.8e-9 and 1.4e-9 of the overlap with two
+    # orderings of the same arithmetic; without friction the three overlaps are equal bit for bit.
+    assert np.ptp(c["overlap"]) <= 1e-8 * c["overlap"].max(), (
         f"corner overlaps not symmetric: {c['overlap']} m"
     )
     # force on the wall per face ~ m g / sqrt(3) (friction may hold a small symmetric residual)

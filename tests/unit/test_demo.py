@@ -167,10 +167,15 @@ def test_silo_demo_pure_cg_jams_and_the_hierarchy_discharges(quick_silo) -> None
     _, stdout, s = quick_silo
     assert s["errors"]["cg"] < -0.7
     assert abs(s["errors"]["mlcg"]) < 0.25
+    # Pure CG clogs: over the last quarter of this short run it discharges less than a fifth of
+    # the resolved rate. Arches of 3 parcels may break and form again: seed 1 of the quick run
+    # stayed jammed with the contact arithmetic before issue 27's reciprocals and flows
+    # intermittently with it (3.4 against 24.4 g/s); the full demo jams for good with both.
     cg = np.array(s["runs"]["cg"]["history"])
     last_quarter = cg[:, 0] >= 0.75 * cg[-1, 0]
-    assert np.ptp(cg[last_quarter, 1]) == 0  # nothing left the silo at the end
-    assert "pure CG, h = 2" in stdout and "jammed at" in stdout
+    end_rate = np.ptp(cg[last_quarter, 1]) / np.ptp(cg[last_quarter, 0])  # kg/s
+    assert end_rate < 0.2 * s["runs"]["reference"]["rate"]
+    assert "pure CG, h = 2" in stdout
     mlcg = s["runs"]["mlcg"]
     assert len(mlcg["particles"]) == 2 and all(n > 0 for n in mlcg["particles"])
     assert sum(mlcg["particles"]) < 0.5 * s["runs"]["reference"]["particles"][0]

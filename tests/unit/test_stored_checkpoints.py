@@ -13,7 +13,9 @@ or, to keep the old checkpoint and renew only the state its run reaches,
 ``--write-after``. ``hierarchy_after.npz`` was renewed so (issue 28) when the flux insertion
 began to place fine grains only where the coarse material reaches (no wall between them): the
 stored run's fine level placed some grains where that rule now refuses them; and again when a
-face began to give up for the interval once four grains in a row find no room (not 32).
+face began to give up for the interval once four grains in a row find no room (not 32). Both
+``*_after.npz`` were renewed so (issue 27) when the contact laws began to multiply by
+reciprocals instead of dividing (a few ulps in every contact force).
 """
 
 from __future__ import annotations
