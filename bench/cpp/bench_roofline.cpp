@@ -44,16 +44,16 @@
 // Flops of Hertz-Mindlin (hertz+none, total history, projected spring, tangential damping),
 // counted from pair_loop.hpp and contact_model.hpp / normal_models.hpp /
 // tangential_models.hpp, sticking path; a division and a square root count 1 flop each (they
-// cost 4-20 multiplications of throughput: 5 divisions and 3 roots per contact):
+// cost 4-20 multiplications of throughput: 2 divisions and 3 roots per contact):
 //   geometry: d = x_i - x_j 3, r_i + r_j 1, |d|^2 5, rsum^2 1, sqrt 1, overlap 1,
-//     n = d / dist 3, contact arms a_i, a_j 3, a_i w_i + a_j w_j 9, cross with n 9,
-//     v_rel 6, R* 2, m* 2                                                         = 46
+//     n = d (1 / dist) 4, contact arms a_i, a_j 3, a_i w_i + a_j w_j 9, cross with n 9,
+//     v_rel 6, R* and m* from one reciprocal (pair_means) 6                       = 49
 //   law: spring projected onto the tangent plane (dot 5, subtract 6) 11, Hertz sqrt(R* d)
-//     and k_n, F_spring, S_n, k_t 9, v_n 5, F_n with damping 5, v_t 6, gamma_t 3,
+//     and k_n, F_spring, S_n, k_t 9, v_n 5, F_n with damping 5, v_t 6, gamma_t 1,
 //     mu F_n 1, spring += v_t dt 6, F_t = -k_t xi - gamma_t v_t 9, |F_t|^2 and the
-//     Coulomb test 6, F = F_n n + F_t 6                                           = 67
+//     Coulomb test 6, F = F_n n + F_t 6                                           = 65
 //   accumulation: n x F 9, f_i 3, t_i 6, f_j 3, t_j 6                            = 27
-//   = 140 per touching contact (a sliding one adds 16), 10 per non-touching entry
+//   = 141 per touching contact (a sliding one adds 16), 10 per non-touching entry
 //   (d, rsum, |d|^2, rsum^2), 6 per particle (f_i, t_i stored). The other laws are
 //   not counted: their line gives the memory roof only.
 //
@@ -216,7 +216,7 @@ double no_reuse_bytes_per_particle(int history, bool rolling, double entries_pp,
 
 // Flops of hertz+none per call, per particle (sticking path; see the top of the file).
 double hertz_mindlin_flops_per_particle(double entries_pp, double contacts_pp) {
-  return 6 + 10 * (entries_pp - contacts_pp) + 140 * contacts_pp;
+  return 6 + 10 * (entries_pp - contacts_pp) + 141 * contacts_pp;
 }
 
 struct LawFigures {
