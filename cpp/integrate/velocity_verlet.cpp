@@ -1,6 +1,10 @@
 #include "integrate/velocity_verlet.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
+
+#include "integrate/kick_drift_lanes.hpp"
 
 namespace grainscale {
 
@@ -61,6 +65,47 @@ inline Real kick_drift_over(ParticleStore& ps, Real dt, const Vec3& gravity, Ind
   return max_v2;
 }
 
+// The pass over the owned particles [0, n) except those with skip[i] != 0 (skip null: none),
+// in blocks of kPackLanes particles (kick_drift_lanes.hpp) where no particle of the block is
+// skipped, one particle at a time elsewhere and in 2-D.
+template <bool kPlanar, bool kClosingKick>
+Real kick_drift_blocks(ParticleStore& ps, Real dt, const Vec3& gravity, const std::uint8_t* skip) {
+  const Index n = ps.n_owned();
+  auto one = [&](Index first, Index end) {
+    return kick_drift_over<kPlanar, kClosingKick>(ps, dt, gravity, end - first, [=](Index k) {
+      return skip != nullptr && skip[first + k] ? Index(-1) : first + k;
+    });
+  };
+  if constexpr (kPlanar || !detail::kKickDriftLanes) {
+    return one(0, n);
+  } else {
+    constexpr int W = kPackLanes;
+    Real* x = ps.position.data()->data();
+    Real* v = ps.velocity.data()->data();
+    Real* w = ps.angular_velocity.data()->data();
+    Real* f = ps.force.data()->data();
+    Real* t = ps.torque.data()->data();
+    const Pack half = splat<Pack>(0.5 * dt), step = splat<Pack>(dt);
+    Pack g[3];
+    for (int q = 0; q < 3; ++q)
+      for (int l = 0; l < W; ++l) g[q][l] = gravity[(W * q + l) % 3];
+    detail::DriftSpeeds speeds;
+    Real max_v2 = 0;
+    Index i = 0;
+    for (; i + W <= n; i += W) {
+      std::uint64_t skipped = 0;  // W <= 8 flags
+      if (skip != nullptr) std::memcpy(&skipped, skip + i, W);
+      if (skipped == 0)
+        detail::kick_drift_block<kClosingKick>(i, x, v, w, f, t, ps.mass.data(), ps.inv_mass.data(),
+                                               ps.inv_inertia.data(), half, step, g, speeds);
+      else
+        max_v2 = larger_or_nan(max_v2, one(i, i + W));
+    }
+    max_v2 = larger_or_nan(max_v2, one(i, n));
+    return speeds.combine(max_v2);
+  }
+}
+
 Real max_displacement2(const ParticleStore& ps, const std::vector<Vec3>& reference) {
   const Vec3* x = ps.position.data();
   Real max_d2 = 0;
@@ -73,16 +118,13 @@ Real max_displacement2(const ParticleStore& ps, const std::vector<Vec3>& referen
 
 template <bool kPlanar, bool kClosingKick>
 Real kick_drift(ParticleStore& ps, Real dt, const Vec3& gravity) {
-  return kick_drift_over<kPlanar, kClosingKick>(ps, dt, gravity, ps.n_owned(),
-                                                [](Index k) { return k; });
+  return kick_drift_blocks<kPlanar, kClosingKick>(ps, dt, gravity, nullptr);
 }
 
 template <bool kPlanar>
 Real kick_drift_except(ParticleStore& ps, Real dt, const Vec3& gravity,
                        const std::vector<std::uint8_t>& skip) {
-  const std::uint8_t* s = skip.data();
-  return kick_drift_over<kPlanar, true>(ps, dt, gravity, ps.n_owned(),
-                                        [s](Index k) { return s[k] ? Index(-1) : k; });
+  return kick_drift_blocks<kPlanar, true>(ps, dt, gravity, skip.data());
 }
 
 template <bool kPlanar>

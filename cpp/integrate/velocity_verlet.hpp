@@ -4,7 +4,8 @@
 // Inside a run the closing half kick of one step and the opening half kick and drift of the next
 // are one pass over the particles (kClosingKick): the same floating-point operations in the same
 // order as two separate passes, so results do not depend on how a run is chunked, with half the
-// memory traffic. The same pass resets the forces (f = m g, tau = 0) once they are used.
+// memory traffic. The same pass resets the forces (f = m g, tau = 0) once they are used. In 3-D
+// it takes kPackLanes particles at a time (kick_drift_lanes.hpp), with the same bits.
 //
 // kPlanar selects the 2-D disc mode (DESIGN.md 2.2): only x, y, v_x, v_y and w_z evolve; z never
 // changes and v_z, w_x, w_y are held at exactly zero, so out-of-plane forces and in-plane torque
