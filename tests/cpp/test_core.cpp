@@ -247,6 +247,55 @@ void test_pair_list_brute() {
   }
 }
 
+// Ghosts: the pairs of the owned particles with each other and with ghosts, each stored at the
+// particle with the smaller id, and none whose smaller id is a ghost's (that pair is stored by
+// the ghost's owner on its own rank).
+void test_pair_list_with_ghosts() {
+  g_test = "pair_list_with_ghosts";
+  const Index n_all = 2000, n_owned = 1500;
+  const Real r_min = 1e-3, skin = 0.2e-3;
+  gs::ParticleStore all;
+  random_poly_store(all, n_all, r_min, 0.055, 77);
+  gs::ParticleStore ps;
+  for (Index i = 0; i < n_owned; ++i) add_particle(ps, all.id[i], all.position[i], all.radius[i]);
+  const Index first = ps.add_ghost_slots(n_all - n_owned);
+  for (Index g = 0; g < n_all - n_owned; ++g) {
+    ps.position[first + g] = all.position[n_owned + g];
+    ps.radius[first + g] = all.radius[n_owned + g];
+    ps.id[first + g] = all.id[n_owned + g];
+  }
+  PairSet expected;
+  std::size_t with_ghost = 0;
+  for (Index i = 0; i < n_all; ++i)
+    for (Index j = i + 1; j < n_all; ++j) {
+      const Real cut = ps.radius[i] + ps.radius[j] + skin;
+      if (!((ps.position[i] - ps.position[j]).squaredNorm() < cut * cut)) continue;
+      const Index smaller = ps.id[i] < ps.id[j] ? i : j;
+      if (smaller >= n_owned) continue;
+      expected.insert({std::min(ps.id[i], ps.id[j]), std::max(ps.id[i], ps.id[j])});
+      with_ghost += std::max(i, j) >= n_owned;
+    }
+  CHECK(with_ghost > 100, "too few owned-ghost pairs: " + std::to_string(with_ghost));
+  for (Real fraction : {1.0, 0.5}) {
+    gs::ContactList list;
+    list.history_stride = 3;
+    build_list(ps, skin, std::size_t(16 * n_all + 64), list, fraction);
+    PairSet got;
+    bool oriented = true;
+    for (Index i = 0; i < n_owned; ++i)
+      for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
+        const Index j = list.partner[k];
+        oriented = oriented && ps.id[i] < ps.id[j];
+        got.insert({std::min(ps.id[i], ps.id[j]), std::max(ps.id[i], ps.id[j])});
+      }
+    const std::string tag = "cells=" + str(fraction) + " x cut-off";
+    CHECK(oriented, tag + ": an entry is not stored at the particle with the smaller id");
+    CHECK(got == expected && list.size() == expected.size(),
+          tag + ": list has " + std::to_string(list.size()) + " entries, expected " +
+              std::to_string(expected.size()));
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Histories are produced by the force loop itself (random velocities and spins on a static,
 // overlapping packing), so the test does not depend on how the list marks touching entries.
@@ -422,6 +471,7 @@ int main() {
   const std::pair<const char*, void (*)()> tests[] = {
       {"hertz_normal_force", test_hertz_normal_force},
       {"pair_list_brute", test_pair_list_brute},
+      {"pair_list_with_ghosts", test_pair_list_with_ghosts},
       {"history_carry", test_history_carry},
       {"material_validation", test_material_validation},
       {"spring_rotation", test_spring_rotation},
