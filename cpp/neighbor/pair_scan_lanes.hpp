@@ -35,6 +35,7 @@ struct GridColumns {
             PageVector<Real>& buffer) {
     static_assert(sizeof(GlobalId) == sizeof(Real));
     const std::size_t n = grid.particles.size();
+    reserve_growing(buffer, 5 * n);  // when it grows, the old buffer goes first
     if (buffer.size() < 5 * n) buffer.resize(5 * n);
     Real* column = buffer.data();
     Real *cx = column, *cy = column + n, *cz = column + 2 * n, *cr = column + 3 * n;
