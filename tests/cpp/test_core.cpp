@@ -10,7 +10,10 @@
 //                          in the new tangent plane, "project" shortens it by cos(theta), and
 //                          the two-vector rotation equals two single ones bit for bit;
 //   page_vector          – a PageVector grown from a few values past the mapping threshold
-//                          keeps its contents; its large buffers are mapped (page aligned).
+//                          keeps its contents; its large buffers are mapped (page aligned);
+//   shared_array_stagger – SharedArrays keep their contents across growth, stay aligned for
+//                          their type, and large ones (huge-page ones included) start at
+//                          different addresses modulo 4 KiB.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -465,6 +468,30 @@ void test_page_vector() {
   CHECK(small.size() == 3 && small[2] == 1.0, "small copy");
 }
 
+void test_shared_array_stagger() {
+  // Five particle arrays of 200k Vec3 (4.8 MB: 2 MiB-aligned huge-page blocks) and five of
+  // 1000 (24 kB), grown from empty in step, as ParticleStore::resize_all grows its arrays.
+  for (const std::size_t n : {std::size_t(200000), std::size_t(1000)}) {
+    std::vector<gs::SharedArray<Vec3>> arrays(5);
+    for (std::size_t k = 0; k < n; ++k)
+      for (gs::SharedArray<Vec3>& a : arrays) a.push_back(Vec3::Constant(static_cast<Real>(k)));
+    std::set<std::uintptr_t> offsets;
+    bool kept = true, aligned = true;
+    for (gs::SharedArray<Vec3>& a : arrays) {
+      for (std::size_t k = 0; k < n; k += 997) kept = kept && a[k][2] == static_cast<Real>(k);
+      const auto address = reinterpret_cast<std::uintptr_t>(a.data());
+      aligned = aligned && address % 64 == 0;
+      offsets.insert(address % 4096);
+    }
+    CHECK(kept, "contents kept across growth");
+    CHECK(aligned, "large buffers 64-byte aligned");
+    CHECK(offsets.size() == arrays.size(), "large buffers start at different offsets mod 4 KiB");
+  }
+  gs::SharedArray<std::int32_t> small;
+  small.resize(3, 7);
+  CHECK(small.size() == 3 && small[2] == 7, "small array");
+}
+
 }  // namespace
 
 int main() {
@@ -476,6 +503,7 @@ int main() {
       {"material_validation", test_material_validation},
       {"spring_rotation", test_spring_rotation},
       {"page_vector", test_page_vector},
+      {"shared_array_stagger", test_shared_array_stagger},
   };
   for (const auto& [name, fn] : tests) {
     const int before = g_failures;
