@@ -93,7 +93,8 @@ Real kick_drift_blocks(ParticleStore& ps, Real dt, const Vec3& gravity, const st
     Real max_v2 = 0;
     Index i = 0;
     for (; i + W <= n; i += W) {
-      std::uint64_t skipped = 0;  // W <= 8 flags
+      static_assert(W <= 8, "a block's skip flags are read as one 64-bit word");
+      std::uint64_t skipped = 0;
       if (skip != nullptr) std::memcpy(&skipped, skip + i, W);
       if (skipped == 0)
         detail::kick_drift_block<kClosingKick>(i, x, v, w, f, t, ps.mass.data(), ps.inv_mass.data(),

@@ -10,16 +10,24 @@ void HistoryCarry::save(const ContactList& list, PartnerKey key) {
   first_.assign(n + 1, 0);
   keys_.clear();
   values_.clear();
-  for (Index i = 0; i < n; ++i) {
-    first_[i] = static_cast<Index>(keys_.size());
-    for (Index k = list.first[i]; k < list.first[i + 1]; ++k) {
-      const Real* h = list.history.data() + static_cast<std::size_t>(k) * stride_;
-      if (!list.touching[k]) continue;
-      keys_.push_back(key(list.partner[k]));
-      values_.insert(values_.end(), h, h + stride_);
-    }
+  const Index total = n > 0 ? list.first[n] : 0;
+  // One loop over the entries, rows taken from the list's index (index_rows), not a loop per
+  // row: rows hold two or three entries and the exit of a loop per row mispredicts at nearly
+  // every row (the 200k settle case: 1.8 % of the run in the loop per row).
+  const bool indexed = list.owner.size() == static_cast<std::size_t>(total);
+  Index row = 0;
+  for (Index k = 0; k < total; ++k) {
+    if (!list.touching[k]) continue;
+    if (indexed)
+      row = list.owner[k];
+    else  // a list without its index (not made by a build or a load)
+      while (list.first[row + 1] <= k) ++row;
+    ++first_[row + 1];
+    keys_.push_back(key(list.partner[k]));
+    const Real* h = list.history.data() + static_cast<std::size_t>(k) * stride_;
+    values_.insert(values_.end(), h, h + stride_);
   }
-  first_[n] = static_cast<Index>(keys_.size());
+  for (Index i = 0; i < n; ++i) first_[i + 1] += first_[i];  // counts -> row starts
 }
 
 void HistoryCarry::restore(const std::vector<Index>& origin, PartnerKey key,

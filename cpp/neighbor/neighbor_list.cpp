@@ -1,6 +1,7 @@
 #include "neighbor/neighbor_list.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <utility>
 
 #include "neighbor/pair_scan_lanes.hpp"
@@ -128,24 +129,72 @@ void index_rows(ContactList& list) {
 void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
                      const std::vector<Index>& primitive_first, Real skin, ContactList& list) {
   const Index n = ps.n_owned();
+  const Vec3* x = ps.position.data();
+  const Real* r = ps.radius.data();
+  // The analytic walls' tests, wall by wall over blocks of particles (whose positions stay in
+  // L1 for all walls): bit w of near[i] is set when particle i is within reach of wall w (the
+  // first kMaskWalls walls). A plane's loop has no branch and is vectorized. One loop over the
+  // particles with a switch per wall took about 10 ns per particle for six planes (the 200k
+  // settle case: 1.6 % of the run), one pass over all particles per plane as long.
+  constexpr std::size_t kMaskWalls = 32;
+  constexpr Index kBlock = 512;
+  const std::size_t masked = std::min(walls.size(), kMaskWalls);
+  bool meshes = walls.size() > kMaskWalls;  // then the per-particle loop below is needed
+  for (std::size_t w = 0; w < masked; ++w) meshes = meshes || walls[w].shape == WallShape::Mesh;
+  PageVector<Index>& near = list.scratch_count;  // (the pair list's build scratch, idle here)
+  near.resize(n);
+  Index* __restrict mask = near.data();
+  const Real* __restrict xs = reinterpret_cast<const Real*>(x);
+  const Real* __restrict rs = r;
+  static_assert(sizeof(Vec3) == 3 * sizeof(Real));
+  for (Index i0 = 0; i0 < n; i0 += kBlock) {
+    const Index i1 = std::min(n, i0 + kBlock);
+    std::fill(mask + i0, mask + i1, 0);
+    for (std::size_t w = 0; w < masked; ++w) {
+      const Wall& wall = walls[w];
+      const Index bit = static_cast<Index>(std::uint32_t(1) << w);
+      if (wall.shape == WallShape::Plane) {
+        // The distance as Wall::closest computes it: (x - p) . n in Vec3::dot's order.
+        const Real p0 = wall.point[0], p1 = wall.point[1], p2 = wall.point[2];
+        const Real n0 = wall.normal[0], n1 = wall.normal[1], n2 = wall.normal[2];
+        for (Index i = i0; i < i1; ++i) {
+          const Real s =
+              ((xs[3 * i] - p0) * n0 + (xs[3 * i + 1] - p1) * n1) + (xs[3 * i + 2] - p2) * n2;
+          mask[i] |= -static_cast<Index>(s < rs[i] + skin) & bit;
+        }
+      } else if (wall.shape != WallShape::Mesh) {
+        for (Index i = i0; i < i1; ++i) {
+          WallContact c;
+          if (wall.closest(x[i], c) && c.distance < r[i] + skin) mask[i] |= bit;
+        }
+      }
+    }
+  }
   list.first.resize(n + 1);
   list.partner.clear();
   std::vector<int> candidates;
   for (Index i = 0; i < n; ++i) {
     list.first[i] = static_cast<Index>(list.partner.size());
-    const Vec3& x = ps.position[i];
-    const Real reach = ps.radius[i] + skin;
+    if (!meshes) {  // the set bits, in wall order
+      for (auto m = static_cast<std::uint32_t>(near[i]); m != 0; m &= m - 1)
+        list.partner.push_back(primitive_first[__builtin_ctz(m)]);
+      continue;
+    }
+    const Real reach = r[i] + skin;
     for (std::size_t w = 0; w < walls.size(); ++w) {
       const Wall& wall = walls[w];
       if (wall.shape == WallShape::Mesh) {
-        wall.mesh->candidates(x, candidates);
+        wall.mesh->candidates(x[i], candidates);
         std::sort(candidates.begin(), candidates.end());
         for (int t : candidates)
-          if ((wall.mesh->closest(t, x).point - x).squaredNorm() < reach * reach)
+          if ((wall.mesh->closest(t, x[i]).point - x[i]).squaredNorm() < reach * reach)
             list.partner.push_back(primitive_first[w] + t);
+      } else if (w < kMaskWalls) {
+        if ((static_cast<std::uint32_t>(near[i]) >> w) & 1u)
+          list.partner.push_back(primitive_first[w]);
       } else {
         WallContact c;
-        if (wall.closest(x, c) && c.distance < reach) list.partner.push_back(primitive_first[w]);
+        if (wall.closest(x[i], c) && c.distance < reach) list.partner.push_back(primitive_first[w]);
       }
     }
   }

@@ -5,6 +5,9 @@
 //   pair_list_brute      – build_pair_list equals an O(N^2) search (2000 random polydisperse
 //                          1:3 particles, shuffled global ids, with and without a cell cap);
 //   history_carry        – HistoryCarry save/restore keeps histories across a permutation;
+//   wall_list            – build_wall_list equals the per-particle test of every wall, in
+//                          order, for 40 planes (more than its bit masks hold), a rectangle
+//                          and a cylinder;
 //   material_validation  – MaterialTable rejects poisson_ratio 0.7 with the documented message;
 //   spring_rotation      – a spring turned with its contact: "rescale" keeps the length and lies
 //                          in the new tangent plane, "project" shortens it by cos(theta), and
@@ -302,6 +305,57 @@ void test_pair_list_with_ghosts() {
 // ---------------------------------------------------------------------------------------------
 // Histories are produced by the force loop itself (random velocities and spins on a static,
 // overlapping packing), so the test does not depend on how the list marks touching entries.
+void test_wall_list() {
+  const Index n = 3000;
+  const Real skin = 0.2e-3;
+  gs::ParticleStore ps;
+  random_poly_store(ps, n, 1e-3, 0.05, 777);
+  std::vector<gs::Wall> walls;
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (int w = 0; w < 40; ++w) {  // planes through the box, in random directions
+    gs::Wall plane;
+    plane.point = Vec3(0.025, 0.025, 0.025) + 0.02 * Vec3(u(rng), u(rng), u(rng));
+    plane.normal = Vec3(u(rng), u(rng), u(rng)).normalized();
+    walls.push_back(plane);
+  }
+  gs::Wall rectangle;
+  rectangle.shape = gs::WallShape::Rectangle;
+  rectangle.point = Vec3(0.01, 0.01, 0.02);
+  rectangle.edge1 = Vec3(0.03, 0, 0);
+  rectangle.edge2 = Vec3(0, 0.03, 0.005);
+  rectangle.normal = rectangle.edge1.cross(rectangle.edge2).normalized();
+  walls.insert(walls.begin() + 3, rectangle);
+  gs::Wall cylinder;
+  cylinder.shape = gs::WallShape::Cylinder;
+  cylinder.point = Vec3(0.025, 0.025, 0);
+  cylinder.radius = 0.02;
+  cylinder.length = 0.04;
+  walls.insert(walls.begin() + 35, cylinder);
+  std::vector<Index> primitive_first(walls.size());
+  std::iota(primitive_first.begin(), primitive_first.end(), Index(0));
+  gs::ContactList list;
+  list.history_stride = 3;
+  gs::build_wall_list(ps, walls, primitive_first, skin, list);
+  std::vector<Index> expected;
+  std::size_t wrong_rows = 0;
+  for (Index i = 0; i < n; ++i) {
+    expected.clear();
+    for (std::size_t w = 0; w < walls.size(); ++w) {
+      gs::WallContact c;
+      if (walls[w].closest(ps.position[i], c) && c.distance < ps.radius[i] + skin)
+        expected.push_back(static_cast<Index>(w));
+    }
+    const std::vector<Index> got(list.partner.begin() + list.first[i],
+                                 list.partner.begin() + list.first[i + 1]);
+    wrong_rows += got != expected;
+  }
+  CHECK(list.size() > static_cast<std::size_t>(n), "too few wall entries for a meaningful test");
+  CHECK(wrong_rows == 0, std::to_string(wrong_rows) + " rows differ from the per-wall test");
+  CHECK(list.owner.size() == list.size() && list.history.size() == 3 * list.size(),
+        "index and history sized");
+}
+
 void test_history_carry() {
   g_test = "history_carry";
   const Index n = 500;
@@ -500,6 +554,7 @@ int main() {
       {"pair_list_brute", test_pair_list_brute},
       {"pair_list_with_ghosts", test_pair_list_with_ghosts},
       {"history_carry", test_history_carry},
+      {"wall_list", test_wall_list},
       {"material_validation", test_material_validation},
       {"spring_rotation", test_spring_rotation},
       {"page_vector", test_page_vector},
