@@ -12,7 +12,7 @@
 // address modulo 4 KiB put f[j] and t[j], or x[i] and v[i], at the same 12 low address bits,
 // and the core then takes a load for one as depending on a pending store to the other ("4K
 // aliasing"), and waits. With 2 MiB-aligned arrays, the pair loop's replay waited on every
-// t[j] -= ... after f[j] -= ...: the dense 200k bed ran 66.5 -> 56.3 ns per particle-step
+// t[j] -= ... after f[j] -= ...: the dense 200k bed ran 68.6 -> 53.5 ns per particle-step
 // staggered (bench/README.md).
 #pragma once
 
