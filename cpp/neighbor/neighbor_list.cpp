@@ -139,8 +139,9 @@ void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
   constexpr std::size_t kMaskWalls = 32;
   constexpr Index kBlock = 512;
   const std::size_t masked = std::min(walls.size(), kMaskWalls);
-  bool meshes = walls.size() > kMaskWalls;  // then the per-particle loop below is needed
-  for (std::size_t w = 0; w < masked; ++w) meshes = meshes || walls[w].shape == WallShape::Mesh;
+  // Meshes, or walls past the masks, need the per-wall loop for each particle below.
+  bool per_wall = walls.size() > kMaskWalls;
+  for (std::size_t w = 0; w < masked; ++w) per_wall = per_wall || walls[w].shape == WallShape::Mesh;
   PageVector<Index>& near = list.scratch_count;  // (the pair list's build scratch, idle here)
   near.resize(n);
   Index* __restrict mask = near.data();
@@ -175,7 +176,7 @@ void build_wall_list(const ParticleStore& ps, const std::vector<Wall>& walls,
   std::vector<int> candidates;
   for (Index i = 0; i < n; ++i) {
     list.first[i] = static_cast<Index>(list.partner.size());
-    if (!meshes) {  // the set bits, in wall order
+    if (!per_wall) {  // the set bits, in wall order
       for (auto m = static_cast<std::uint32_t>(near[i]); m != 0; m &= m - 1)
         list.partner.push_back(primitive_first[__builtin_ctz(m)]);
       continue;
